@@ -1,0 +1,267 @@
+//! The case format of DESIGN.md §2.2: serde types with defaults, loading with
+//! `--set` overrides, and validation that names the field path of every problem.
+//!
+//! Unknown fields are rejected (`deny_unknown_fields`): a typo in a case must not be
+//! silently ignored.
+
+mod load;
+mod scheme;
+mod validate;
+
+pub use load::{apply_override, load_case_file, parse_case_str, parse_case_value};
+pub use scheme::*;
+pub use validate::{validate, Limits};
+
+use schemars::JsonSchema;
+use serde::{Deserialize, Serialize};
+
+/// A 2D point or vector `[x, y]` in metres (or m/s, m/s²).
+pub type Point = [f64; 2];
+
+/// Error in a case: the dotted field path (`bodies[0].polygon`) and the reason.
+#[derive(Debug, Clone, PartialEq, thiserror::Error, Serialize)]
+#[error("{path}: {message}")]
+pub struct CaseError {
+    pub path: String,
+    pub message: String,
+}
+
+impl CaseError {
+    pub fn new(path: impl Into<String>, message: impl Into<String>) -> Self {
+        Self { path: path.into(), message: message.into() }
+    }
+}
+
+/// A complete simulation case.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, JsonSchema)]
+#[serde(deny_unknown_fields)]
+pub struct Case {
+    /// Free-form name, used in outputs.
+    pub name: String,
+    /// Where the expected answer of this case comes from (validation cases).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub reference: Option<Reference>,
+    pub fluid: Fluid,
+    /// Initial particle spacing l0 (m). Every length in `scheme` is a ratio of it.
+    pub particle_spacing: f64,
+    /// Particles leaving this box are removed and counted.
+    pub domain: Domain,
+    /// Polygons filled with fluid particles on a square lattice of `particle_spacing`.
+    pub fluid_blocks: Vec<FluidBlock>,
+    /// Fixed walls (open or closed polylines).
+    #[serde(default)]
+    pub walls: Vec<Wall>,
+    /// Rigid bodies (closed polygons, counter-clockwise in the body frame).
+    #[serde(default)]
+    pub bodies: Vec<Body>,
+    pub time: TimeControl,
+    #[serde(default)]
+    pub output: Output,
+    #[serde(default)]
+    pub scheme: Scheme,
+}
+
+/// Where a validation case's expected answer comes from.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, JsonSchema)]
+#[serde(deny_unknown_fields)]
+pub struct Reference {
+    /// Citation or section of references.md.
+    pub source: String,
+    /// What is compared and how.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub quantity: Option<String>,
+    /// Expected values, free form.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub values: Option<serde_json::Value>,
+}
+
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, JsonSchema)]
+#[serde(deny_unknown_fields)]
+pub struct Fluid {
+    /// kg/m³
+    #[serde(default = "default_density")]
+    pub density: f64,
+    /// m²/s; zero switches the viscous stage off.
+    #[serde(default = "default_viscosity")]
+    pub kinematic_viscosity: f64,
+    /// m/s²
+    #[serde(default = "default_gravity")]
+    pub gravity: Point,
+}
+
+fn default_density() -> f64 {
+    1000.0
+}
+fn default_viscosity() -> f64 {
+    1.0e-6
+}
+fn default_gravity() -> Point {
+    [0.0, -9.81]
+}
+
+impl Default for Fluid {
+    fn default() -> Self {
+        Self { density: default_density(), kinematic_viscosity: default_viscosity(), gravity: default_gravity() }
+    }
+}
+
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, JsonSchema)]
+#[serde(deny_unknown_fields)]
+pub struct Domain {
+    pub min: Point,
+    pub max: Point,
+}
+
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, JsonSchema)]
+#[serde(deny_unknown_fields)]
+pub struct FluidBlock {
+    /// Closed polygon (either orientation), vertices in metres.
+    pub polygon: Vec<Point>,
+    /// Initial velocity of the block's particles (m/s).
+    #[serde(default)]
+    pub velocity: Point,
+}
+
+/// Which side of a wall polyline the fluid is on, walking from the first vertex.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize, JsonSchema, Default)]
+#[serde(rename_all = "snake_case")]
+pub enum FluidSide {
+    /// Decided from the initial fluid (the side holding most particles near the wall).
+    #[default]
+    Auto,
+    Left,
+    Right,
+}
+
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, JsonSchema)]
+#[serde(deny_unknown_fields)]
+pub struct Wall {
+    /// Name used in `loads.csv`.
+    pub name: String,
+    /// Vertices of the polyline (m).
+    pub polyline: Vec<Point>,
+    /// Join the last vertex to the first.
+    #[serde(default)]
+    pub closed: bool,
+    /// The fluid side; the other side is solid (thickness is irrelevant to the model).
+    #[serde(default)]
+    pub fluid_side: FluidSide,
+}
+
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, JsonSchema)]
+#[serde(deny_unknown_fields)]
+pub struct Body {
+    pub name: String,
+    /// Closed polygon in the body frame, counter-clockwise (m).
+    pub polygon: Vec<Point>,
+    /// World position of the body-frame origin (m).
+    #[serde(default)]
+    pub position: Point,
+    /// Rotation of the body frame (rad).
+    #[serde(default)]
+    pub angle: f64,
+    pub motion: Motion,
+}
+
+/// How a body moves.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, JsonSchema)]
+#[serde(tag = "type", rename_all = "snake_case", deny_unknown_fields)]
+pub enum Motion {
+    /// Kinematic: velocity imposed, constant or from a table.
+    Prescribed {
+        /// Constant velocity (m/s), used when `table` is absent.
+        #[serde(default)]
+        velocity: Point,
+        /// Constant angular velocity (rad/s).
+        #[serde(default)]
+        angular_velocity: f64,
+        /// Velocity time table, linearly interpolated, held constant outside.
+        #[serde(default, skip_serializing_if = "Option::is_none")]
+        table: Option<Vec<VelocitySample>>,
+    },
+    /// Dynamic: moved by gravity, fluid force and contacts.
+    Free {
+        /// kg per metre of span.
+        mass: f64,
+        /// kg·m²/m about the centre of mass; from the polygon with uniform density if absent.
+        #[serde(default, skip_serializing_if = "Option::is_none")]
+        inertia: Option<f64>,
+        #[serde(default)]
+        velocity: Point,
+        #[serde(default)]
+        angular_velocity: f64,
+        /// Degrees of freedom held fixed.
+        #[serde(default)]
+        locked: Vec<Dof>,
+    },
+}
+
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, JsonSchema)]
+#[serde(deny_unknown_fields)]
+pub struct VelocitySample {
+    pub time: f64,
+    pub velocity: Point,
+    #[serde(default)]
+    pub angular_velocity: f64,
+}
+
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize, JsonSchema)]
+#[serde(rename_all = "snake_case")]
+pub enum Dof {
+    X,
+    Y,
+    Rotation,
+}
+
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, JsonSchema)]
+#[serde(deny_unknown_fields)]
+pub struct TimeControl {
+    /// Simulated end time (s).
+    pub end: f64,
+    /// Courant number: dt <= cfl * l0 / u_max.
+    #[serde(default = "default_cfl")]
+    pub cfl: f64,
+    /// Upper bound on the time step (s).
+    #[serde(default = "default_max_dt")]
+    pub max_dt: f64,
+}
+
+fn default_cfl() -> f64 {
+    0.2
+}
+fn default_max_dt() -> f64 {
+    1.0e-3
+}
+
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, JsonSchema)]
+#[serde(deny_unknown_fields)]
+pub struct Output {
+    /// Interval between rows of loads.csv, bodies.csv and probes.csv (s); null: every step.
+    #[serde(default = "default_load_interval")]
+    pub load_interval: Option<f64>,
+    /// Interval between VTK snapshots (s); null: none.
+    #[serde(default)]
+    pub snapshot_interval: Option<f64>,
+    #[serde(default)]
+    pub probes: Vec<Probe>,
+    /// Width of the zero-phase moving-average filter applied to loads (s); null: automatic.
+    #[serde(default)]
+    pub filter_window: Option<f64>,
+}
+
+fn default_load_interval() -> Option<f64> {
+    Some(1.0e-3)
+}
+
+impl Default for Output {
+    fn default() -> Self {
+        Self { load_interval: default_load_interval(), snapshot_interval: None, probes: Vec::new(), filter_window: None }
+    }
+}
+
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, JsonSchema)]
+#[serde(deny_unknown_fields)]
+pub struct Probe {
+    pub name: String,
+    pub position: Point,
+}

@@ -1,0 +1,52 @@
+//! Scalar and vector types, in one place.
+
+pub type Real = f64;
+pub type Vec2 = nalgebra::Vector2<Real>;
+pub type Mat2 = nalgebra::Matrix2<Real>;
+
+/// 2D cross product (z component).
+#[inline]
+pub fn cross(a: Vec2, b: Vec2) -> Real {
+    a.x * b.y - a.y * b.x
+}
+
+/// `[x, y]` from a case file.
+#[inline]
+pub fn vec2(p: [Real; 2]) -> Vec2 {
+    Vec2::new(p[0], p[1])
+}
+
+/// Counter-clockwise perpendicular.
+#[inline]
+pub fn perp(a: Vec2) -> Vec2 {
+    Vec2::new(-a.y, a.x)
+}
+
+/// Rotate by `angle` (rad).
+#[inline]
+pub fn rotate(a: Vec2, angle: Real) -> Vec2 {
+    let (s, c) = angle.sin_cos();
+    Vec2::new(c * a.x - s * a.y, s * a.x + c * a.y)
+}
+
+/// Sum of `f(i)` for `i in 0..n` whose result does not depend on the number of
+/// threads: fixed chunks are summed in parallel, the partial sums in index order.
+pub fn deterministic_sum<F>(n: usize, f: F) -> Real
+where
+    F: Fn(usize) -> Real + Sync,
+{
+    use rayon::prelude::*;
+    const CHUNK: usize = 2048;
+    let chunks = n.div_ceil(CHUNK);
+    let partial: Vec<Real> = (0..chunks)
+        .into_par_iter()
+        .map(|c| {
+            let mut s = 0.0;
+            for i in c * CHUNK..((c + 1) * CHUNK).min(n) {
+                s += f(i);
+            }
+            s
+        })
+        .collect();
+    partial.iter().sum()
+}

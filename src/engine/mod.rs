@@ -1,0 +1,15 @@
+//! The MPS core: pure, synchronous and deterministic. It imports neither rapier nor
+//! tokio; bodies are wall objects whose pose the coupling sets between steps.
+
+pub mod kernel;
+pub mod math;
+pub mod neighbors;
+pub mod params;
+pub mod particles;
+pub mod pressure;
+pub mod scene;
+pub mod simulation;
+pub mod step;
+pub mod walls;
+
+pub use simulation::{SimError, Simulation, StageTimes, StepInfo, WallLoad};

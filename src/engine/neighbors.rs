@@ -1,0 +1,154 @@
+//! Neighbour search: a uniform cell grid filled by counting sort, then a CSR list
+//! of the neighbours of every particle within a radius. Built in parallel over
+//! fixed chunks of particles and concatenated in order, so the list (and every
+//! sum over it) is the same whatever the number of threads.
+
+use super::math::{Real, Vec2};
+use rayon::prelude::*;
+
+/// Cells of side `cell_size` covering a bounding box; particles sorted by cell.
+#[derive(Debug, Clone, Default)]
+pub struct CellGrid {
+    pub origin: Vec2,
+    pub cell_size: Real,
+    pub nx: usize,
+    pub ny: usize,
+    /// `cell_start[c]..cell_start[c + 1]` indexes `sorted` for cell c.
+    pub cell_start: Vec<u32>,
+    /// Particle indices ordered by cell, increasing index within a cell.
+    pub sorted: Vec<u32>,
+}
+
+impl CellGrid {
+    pub fn build(positions: &[Vec2], cell_size: Real) -> Self {
+        assert!(cell_size > 0.0);
+        if positions.is_empty() {
+            return Self { origin: Vec2::zeros(), cell_size, nx: 1, ny: 1, cell_start: vec![0, 0], sorted: vec![] };
+        }
+        let (mut lo, mut hi) = (positions[0], positions[0]);
+        for p in positions {
+            lo = lo.inf(p);
+            hi = hi.sup(p);
+        }
+        let origin = lo - Vec2::new(cell_size, cell_size);
+        let nx = (((hi.x - origin.x) / cell_size).floor() as usize + 2).max(1);
+        let ny = (((hi.y - origin.y) / cell_size).floor() as usize + 2).max(1);
+        let cell_of: Vec<u32> = positions
+            .par_iter()
+            .map(|p| {
+                let cx = ((p.x - origin.x) / cell_size) as usize;
+                let cy = ((p.y - origin.y) / cell_size) as usize;
+                (cy.min(ny - 1) * nx + cx.min(nx - 1)) as u32
+            })
+            .collect();
+        let mut cell_start = vec![0u32; nx * ny + 1];
+        for &c in &cell_of {
+            cell_start[c as usize + 1] += 1;
+        }
+        for c in 0..nx * ny {
+            cell_start[c + 1] += cell_start[c];
+        }
+        let mut fill = cell_start.clone();
+        let mut sorted = vec![0u32; positions.len()];
+        for (i, &c) in cell_of.iter().enumerate() {
+            sorted[fill[c as usize] as usize] = i as u32;
+            fill[c as usize] += 1;
+        }
+        Self { origin, cell_size, nx, ny, cell_start, sorted }
+    }
+
+    /// Cell coordinates of a point, clamped to the grid.
+    #[inline]
+    pub fn cell_coords(&self, p: Vec2) -> (isize, isize) {
+        (
+            ((p.x - self.origin.x) / self.cell_size).floor() as isize,
+            ((p.y - self.origin.y) / self.cell_size).floor() as isize,
+        )
+    }
+
+    /// Call `f(j)` for every particle in the cells within `reach` cells of `p`.
+    #[inline]
+    pub fn for_each_near(&self, p: Vec2, reach: isize, mut f: impl FnMut(usize)) {
+        let (cx, cy) = self.cell_coords(p);
+        for y in (cy - reach).max(0)..=(cy + reach).min(self.ny as isize - 1) {
+            let row = y as usize * self.nx;
+            let x0 = (cx - reach).max(0) as usize;
+            let x1 = (cx + reach).min(self.nx as isize - 1);
+            if x1 < x0 as isize {
+                continue;
+            }
+            let a = self.cell_start[row + x0] as usize;
+            let b = self.cell_start[row + x1 as usize + 1] as usize;
+            for &j in &self.sorted[a..b] {
+                f(j as usize);
+            }
+        }
+    }
+}
+
+/// Compressed-sparse-row neighbour list: `indices[offsets[i]..offsets[i + 1]]` are
+/// the neighbours j != i of particle i with |x_j - x_i| < radius.
+#[derive(Debug, Clone, Default)]
+pub struct NeighborList {
+    pub radius: Real,
+    pub offsets: Vec<u32>,
+    pub indices: Vec<u32>,
+    pub grid: CellGrid,
+}
+
+const CHUNK: usize = 1024;
+
+impl NeighborList {
+    pub fn build(positions: &[Vec2], radius: Real) -> Self {
+        let grid = CellGrid::build(positions, radius);
+        let r2 = radius * radius;
+        let n = positions.len();
+        let chunks: Vec<(Vec<u32>, Vec<u32>)> = (0..n.div_ceil(CHUNK))
+            .into_par_iter()
+            .map(|c| {
+                let mut counts = Vec::with_capacity(CHUNK);
+                let mut idx = Vec::with_capacity(CHUNK * 24);
+                for i in c * CHUNK..((c + 1) * CHUNK).min(n) {
+                    let xi = positions[i];
+                    let before = idx.len();
+                    grid.for_each_near(xi, 1, |j| {
+                        if j != i && (positions[j] - xi).norm_squared() < r2 {
+                            idx.push(j as u32);
+                        }
+                    });
+                    counts.push((idx.len() - before) as u32);
+                }
+                (counts, idx)
+            })
+            .collect();
+        let mut offsets = Vec::with_capacity(n + 1);
+        offsets.push(0u32);
+        let total: usize = chunks.iter().map(|(_, idx)| idx.len()).sum();
+        let mut indices = Vec::with_capacity(total);
+        for (counts, idx) in chunks {
+            for c in counts {
+                offsets.push(offsets.last().unwrap() + c);
+            }
+            indices.extend_from_slice(&idx);
+        }
+        Self { radius, offsets, indices, grid }
+    }
+
+    #[inline]
+    pub fn of(&self, i: usize) -> &[u32] {
+        &self.indices[self.offsets[i] as usize..self.offsets[i + 1] as usize]
+    }
+
+    pub fn len(&self) -> usize {
+        self.offsets.len().saturating_sub(1)
+    }
+
+    pub fn is_empty(&self) -> bool {
+        self.len() == 0
+    }
+
+    /// Total number of (i, j) pairs stored.
+    pub fn pair_count(&self) -> usize {
+        self.indices.len()
+    }
+}

@@ -1,0 +1,50 @@
+//! The pressure Poisson equation: a sparse system over the particles that are not on
+//! the free surface (those carry the Dirichlet value p = 0), and its linear solvers.
+//!
+//! Sign convention: the engine assembles A p = b with A = -(discrete Laplacian) (+ the
+//! quasi-compressibility diagonal), which is symmetric positive definite for the
+//! symmetric Laplacians, so conjugate gradients apply.
+
+mod csr;
+mod pcg;
+
+pub use csr::CsrMatrix;
+pub use pcg::{bicgstab, conjugate_gradient, Preconditioner};
+
+use crate::case::SolverKind;
+use crate::engine::math::Real;
+
+/// Convergence report of an iterative solve (faer style: `Params -> Result<Info, Error>`).
+#[derive(Debug, Clone, Copy, Default, PartialEq)]
+pub struct SolveInfo {
+    pub iterations: usize,
+    /// ||b - A x|| / ||b|| at exit.
+    pub relative_residual: Real,
+}
+
+/// Settings of a solve.
+#[derive(Debug, Clone, Copy)]
+pub struct SolveParams {
+    pub tolerance: Real,
+    pub max_iterations: usize,
+}
+
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+pub enum SolveError {
+    #[error("linear solver did not converge: relative residual {relative_residual:.3e} after {iterations} iterations")]
+    NotConverged { iterations: usize, relative_residual: Real },
+    #[error("linear solver broke down (non-finite value)")]
+    Breakdown,
+    #[error("direct factorisation failed: {0}")]
+    Factorization(String),
+}
+
+/// Solve A x = b with the chosen solver; `x` holds the initial guess on entry.
+pub fn solve(kind: SolverKind, a: &CsrMatrix, b: &[Real], x: &mut [Real], params: SolveParams) -> Result<SolveInfo, SolveError> {
+    match kind {
+        SolverKind::PcgJacobi => conjugate_gradient(a, b, x, params, Preconditioner::Jacobi),
+        SolverKind::PcgIc0 => conjugate_gradient(a, b, x, params, Preconditioner::IncompleteCholesky),
+        SolverKind::Bicgstab => bicgstab(a, b, x, params),
+        SolverKind::Direct => csr::solve_direct(a, b, x),
+    }
+}

@@ -1,0 +1,218 @@
+//! Krylov solvers over [`CsrMatrix`]: preconditioned conjugate gradients (Jacobi or
+//! IC(0)) for the symmetric systems, BiCGSTAB (Jacobi) for the others. Dot products
+//! use fixed-chunk reductions so iterates do not depend on the thread count.
+
+use super::{CsrMatrix, SolveError, SolveInfo, SolveParams};
+use crate::engine::math::{deterministic_sum, Real};
+use rayon::prelude::*;
+
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Preconditioner {
+    Jacobi,
+    IncompleteCholesky,
+}
+
+fn dot(a: &[Real], b: &[Real]) -> Real {
+    deterministic_sum(a.len(), |i| a[i] * b[i])
+}
+
+fn axpy(y: &mut [Real], alpha: Real, x: &[Real]) {
+    y.par_iter_mut().with_min_len(1024).zip(x.par_iter()).for_each(|(yi, xi)| *yi += alpha * xi);
+}
+
+/// Zero-fill incomplete Cholesky factor L (lower, CSR of the lower triangle incl. diagonal).
+struct Ic0 {
+    n: usize,
+    row_ptr: Vec<usize>,
+    col: Vec<u32>,
+    val: Vec<Real>,
+}
+
+impl Ic0 {
+    fn new(a: &CsrMatrix) -> Option<Self> {
+        let n = a.n;
+        let mut row_ptr = vec![0usize; n + 1];
+        let mut col = Vec::new();
+        let mut val = Vec::new();
+        for i in 0..n {
+            let mut entries: Vec<(u32, Real)> = (a.row_ptr[i]..a.row_ptr[i + 1])
+                .filter(|&k| a.col[k] as usize <= i)
+                .map(|k| (a.col[k], a.val[k]))
+                .collect();
+            entries.sort_by_key(|e| e.0);
+            for (c, v) in entries {
+                col.push(c);
+                val.push(v);
+            }
+            row_ptr[i + 1] = col.len();
+        }
+        // IC(0): for each row i, for each k < i in the pattern: l_ik = (a_ik - Σ_{j<k} l_ij l_kj) / l_kk
+        let diag_pos: Vec<usize> = (0..n).map(|i| row_ptr[i + 1] - 1).collect();
+        for i in 0..n {
+            let (ri0, ri1) = (row_ptr[i], row_ptr[i + 1]);
+            for p in ri0..ri1 {
+                let k = col[p] as usize;
+                // Σ_{j<k} l_ij l_kj over the shared pattern (both rows sorted)
+                let (mut a_, mut b_) = (ri0, row_ptr[k]);
+                let mut s = 0.0;
+                while a_ < p && b_ < diag_pos[k] {
+                    let (ca, cb) = (col[a_], col[b_]);
+                    if ca == cb {
+                        s += val[a_] * val[b_];
+                        a_ += 1;
+                        b_ += 1;
+                    } else if ca < cb {
+                        a_ += 1;
+                    } else {
+                        b_ += 1;
+                    }
+                }
+                if k == i {
+                    let d = val[p] - s;
+                    if d <= 0.0 || !d.is_finite() {
+                        return None;
+                    }
+                    val[p] = d.sqrt();
+                } else {
+                    val[p] = (val[p] - s) / val[diag_pos[k]];
+                }
+            }
+        }
+        Some(Self { n, row_ptr, col, val })
+    }
+
+    /// z = (L Lᵀ)⁻¹ r
+    fn apply(&self, r: &[Real], z: &mut [Real]) {
+        let n = self.n;
+        // forward: L y = r
+        for i in 0..n {
+            let mut s = r[i];
+            let end = self.row_ptr[i + 1] - 1;
+            for p in self.row_ptr[i]..end {
+                s -= self.val[p] * z[self.col[p] as usize];
+            }
+            z[i] = s / self.val[end];
+        }
+        // backward: Lᵀ x = y (column-oriented sweep over the rows of L)
+        for i in (0..n).rev() {
+            let end = self.row_ptr[i + 1] - 1;
+            z[i] /= self.val[end];
+            let zi = z[i];
+            for p in self.row_ptr[i]..end {
+                z[self.col[p] as usize] -= self.val[p] * zi;
+            }
+        }
+    }
+}
+
+/// Preconditioned conjugate gradients; `x` is the initial guess.
+pub fn conjugate_gradient(a: &CsrMatrix, b: &[Real], x: &mut [Real], params: SolveParams, pre: Preconditioner) -> Result<SolveInfo, SolveError> {
+    let n = a.n;
+    if n == 0 {
+        return Ok(SolveInfo::default());
+    }
+    let bnorm = dot(b, b).sqrt();
+    if bnorm == 0.0 {
+        x.iter_mut().for_each(|v| *v = 0.0);
+        return Ok(SolveInfo::default());
+    }
+    let inv_diag: Vec<Real> = a.diagonal().iter().map(|d| if *d != 0.0 { 1.0 / d } else { 1.0 }).collect();
+    let ic = match pre {
+        Preconditioner::IncompleteCholesky => Ic0::new(a),
+        Preconditioner::Jacobi => None,
+    };
+    let precondition = |r: &[Real], z: &mut [Real]| match &ic {
+        Some(ic) => ic.apply(r, z),
+        None => z.par_iter_mut().with_min_len(1024).enumerate().for_each(|(i, zi)| *zi = r[i] * inv_diag[i]),
+    };
+    let mut r = vec![0.0; n];
+    a.mul(x, &mut r);
+    r.par_iter_mut().zip(b.par_iter()).for_each(|(ri, bi)| *ri = bi - *ri);
+    let mut z = vec![0.0; n];
+    precondition(&r, &mut z);
+    let mut p = z.clone();
+    let mut q = vec![0.0; n];
+    let mut rz = dot(&r, &z);
+    let mut rel = dot(&r, &r).sqrt() / bnorm;
+    let mut it = 0;
+    while rel > params.tolerance {
+        if it >= params.max_iterations {
+            return Err(SolveError::NotConverged { iterations: it, relative_residual: rel });
+        }
+        a.mul(&p, &mut q);
+        let pq = dot(&p, &q);
+        if !(pq.is_finite()) || pq == 0.0 {
+            return Err(SolveError::Breakdown);
+        }
+        let alpha = rz / pq;
+        axpy(x, alpha, &p);
+        axpy(&mut r, -alpha, &q);
+        precondition(&r, &mut z);
+        let rz_new = dot(&r, &z);
+        let beta = rz_new / rz;
+        rz = rz_new;
+        p.par_iter_mut().with_min_len(1024).zip(z.par_iter()).for_each(|(pi, zi)| *pi = zi + beta * *pi);
+        rel = dot(&r, &r).sqrt() / bnorm;
+        if !rel.is_finite() {
+            return Err(SolveError::Breakdown);
+        }
+        it += 1;
+    }
+    Ok(SolveInfo { iterations: it, relative_residual: rel })
+}
+
+/// BiCGSTAB with a Jacobi preconditioner, for non-symmetric operators.
+pub fn bicgstab(a: &CsrMatrix, b: &[Real], x: &mut [Real], params: SolveParams) -> Result<SolveInfo, SolveError> {
+    let n = a.n;
+    if n == 0 {
+        return Ok(SolveInfo::default());
+    }
+    let bnorm = dot(b, b).sqrt();
+    if bnorm == 0.0 {
+        x.iter_mut().for_each(|v| *v = 0.0);
+        return Ok(SolveInfo::default());
+    }
+    let inv_diag: Vec<Real> = a.diagonal().iter().map(|d| if *d != 0.0 { 1.0 / d } else { 1.0 }).collect();
+    let jac = |v: &[Real], out: &mut [Real]| out.par_iter_mut().enumerate().for_each(|(i, o)| *o = v[i] * inv_diag[i]);
+    let mut r = vec![0.0; n];
+    a.mul(x, &mut r);
+    r.par_iter_mut().zip(b.par_iter()).for_each(|(ri, bi)| *ri = bi - *ri);
+    let r0 = r.clone();
+    let (mut rho, mut alpha, mut omega) = (1.0, 1.0, 1.0);
+    let mut v = vec![0.0; n];
+    let mut p = vec![0.0; n];
+    let (mut y, mut s, mut zz, mut t) = (vec![0.0; n], vec![0.0; n], vec![0.0; n], vec![0.0; n]);
+    let mut rel = dot(&r, &r).sqrt() / bnorm;
+    let mut it = 0;
+    while rel > params.tolerance {
+        if it >= params.max_iterations {
+            return Err(SolveError::NotConverged { iterations: it, relative_residual: rel });
+        }
+        let rho_new = dot(&r0, &r);
+        if rho_new == 0.0 || !rho_new.is_finite() {
+            return Err(SolveError::Breakdown);
+        }
+        let beta = (rho_new / rho) * (alpha / omega);
+        rho = rho_new;
+        p.par_iter_mut().enumerate().for_each(|(i, pi)| *pi = r[i] + beta * (*pi - omega * v[i]));
+        jac(&p, &mut y);
+        a.mul(&y, &mut v);
+        alpha = rho / dot(&r0, &v);
+        s.par_iter_mut().enumerate().for_each(|(i, si)| *si = r[i] - alpha * v[i]);
+        jac(&s, &mut zz);
+        a.mul(&zz, &mut t);
+        let tt = dot(&t, &t);
+        omega = if tt > 0.0 { dot(&t, &s) / tt } else { 0.0 };
+        x.par_iter_mut().enumerate().for_each(|(i, xi)| *xi += alpha * y[i] + omega * zz[i]);
+        r.par_iter_mut().enumerate().for_each(|(i, ri)| *ri = s[i] - omega * t[i]);
+        rel = dot(&r, &r).sqrt() / bnorm;
+        if !rel.is_finite() {
+            return Err(SolveError::Breakdown);
+        }
+        it += 1;
+        if omega == 0.0 && rel > params.tolerance {
+            return Err(SolveError::Breakdown);
+        }
+    }
+    Ok(SolveInfo { iterations: it, relative_residual: rel })
+}

@@ -1,0 +1,159 @@
+//! From a case to the initial state: fluid particles on a square lattice of l0 inside
+//! the fluid blocks, half a spacing clear of every wall and body surface (so the
+//! virtual wall lattice continues the fluid lattice and n = n0 initially), and the
+//! wall objects with their solid regions.
+
+use super::math::{cross, rotate, vec2, Real, Vec2};
+use super::params::MpsParameters;
+use super::particles::Particles;
+use super::walls::geometry::{centroid, closest_on_segment, inside, WallShape};
+use super::walls::{WallObject, WallState};
+use crate::case::{Case, FluidSide, Motion};
+use std::collections::HashSet;
+
+pub struct Scene {
+    pub particles: Particles,
+    pub walls: Vec<WallObject>,
+    pub domain_min: Vec2,
+    pub domain_max: Vec2,
+}
+
+/// Lattice points of spacing l0 inside `polygon`, anchored half a spacing from its lower-left bound.
+pub fn fill_polygon(polygon: &[Vec2], l0: Real) -> Vec<Vec2> {
+    let n = polygon.len();
+    let edges: Vec<[Vec2; 2]> = (0..n).map(|k| [polygon[k], polygon[(k + 1) % n]]).collect();
+    let mut lo = Vec2::repeat(Real::INFINITY);
+    let mut hi = Vec2::repeat(Real::NEG_INFINITY);
+    for p in polygon {
+        lo = lo.inf(p);
+        hi = hi.sup(p);
+    }
+    let nx = ((hi.x - lo.x) / l0 + 1e-9).floor() as i64;
+    let ny = ((hi.y - lo.y) / l0 + 1e-9).floor() as i64;
+    let mut pts = Vec::new();
+    for j in 0..ny.max(0) {
+        for i in 0..nx.max(0) {
+            let p = Vec2::new(lo.x + (i as Real + 0.5) * l0, lo.y + (j as Real + 0.5) * l0);
+            if inside(p, &edges) {
+                pts.push(p);
+            }
+        }
+    }
+    pts
+}
+
+/// Thickness given to open wall polylines: deeper than any kernel reach.
+pub fn wall_thickness(params: &MpsParameters) -> Real {
+    2.0 * params.re.max(params.re_lap) + 2.0 * params.l0
+}
+
+/// World-frame state of body `b` at t = 0.
+pub fn initial_body_state(case: &Case, b: usize) -> WallState {
+    let body = &case.bodies[b];
+    let poly: Vec<Vec2> = body.polygon.iter().map(|p| vec2(*p)).collect();
+    let position = vec2(body.position);
+    let com = position + rotate(centroid(&poly), body.angle);
+    let (velocity, angular_velocity) = match &body.motion {
+        Motion::Prescribed { velocity, angular_velocity, table } => match table.as_ref().and_then(|t| t.first()) {
+            Some(first) => (vec2(first.velocity), first.angular_velocity),
+            None => (vec2(*velocity), *angular_velocity),
+        },
+        Motion::Free { velocity, angular_velocity, .. } => (vec2(*velocity), *angular_velocity),
+    };
+    WallState { position, angle: body.angle, velocity, angular_velocity, center_of_mass: com, ..Default::default() }
+}
+
+pub fn build_scene(case: &Case, params: &MpsParameters) -> Scene {
+    let l0 = params.l0;
+    // 1. candidate fluid particles, one per lattice site even where blocks overlap
+    let mut seen: HashSet<(i64, i64)> = HashSet::new();
+    let mut candidates: Vec<(Vec2, Vec2)> = Vec::new();
+    for block in &case.fluid_blocks {
+        let poly: Vec<Vec2> = block.polygon.iter().map(|p| vec2(*p)).collect();
+        for p in fill_polygon(&poly, l0) {
+            let key = ((p.x / (0.25 * l0)).round() as i64, (p.y / (0.25 * l0)).round() as i64);
+            if seen.insert(key) {
+                candidates.push((p, vec2(block.velocity)));
+            }
+        }
+    }
+    // 2. wall objects: fixed walls (side from the fluid when automatic), then bodies
+    let thickness = wall_thickness(params);
+    let mut walls = Vec::new();
+    for wall in &case.walls {
+        let pts: Vec<Vec2> = wall.polyline.iter().map(|p| vec2(*p)).collect();
+        let solid_left = match wall.fluid_side {
+            FluidSide::Left => false,
+            FluidSide::Right => true,
+            FluidSide::Auto => fluid_is_right(&pts, wall.closed, &candidates, 2.0 * params.re.max(params.re_lap)),
+        };
+        walls.push(WallObject {
+            name: wall.name.clone(),
+            body: None,
+            shape: WallShape::from_polyline(&pts, wall.closed, solid_left, thickness),
+            state: WallState::default(),
+        });
+    }
+    for (b, body) in case.bodies.iter().enumerate() {
+        let poly: Vec<Vec2> = body.polygon.iter().map(|p| vec2(*p)).collect();
+        walls.push(WallObject {
+            name: body.name.clone(),
+            body: Some(b),
+            shape: WallShape::solid_polygon(&poly),
+            state: initial_body_state(case, b),
+        });
+    }
+    // 3. keep the candidates outside every solid and at least l0/2 from every surface
+    let placed: Vec<(Vec<[Vec2; 2]>, Vec<[Vec2; 2]>)> = walls
+        .iter()
+        .map(|w| {
+            let s = w.shape.transformed(w.state.position, w.state.angle);
+            (s.surface.clone(), s.loop_edges())
+        })
+        .collect();
+    let clearance = 0.5 * l0 * (1.0 - 1e-6);
+    let (mut pos, mut vel) = (Vec::new(), Vec::new());
+    'next: for (p, v) in candidates {
+        for (surface, loops) in &placed {
+            if inside(p, loops) {
+                continue 'next;
+            }
+            if surface.iter().any(|[a, b]| (closest_on_segment(p, *a, *b) - p).norm() < clearance) {
+                continue 'next;
+            }
+        }
+        pos.push(p);
+        vel.push(v);
+    }
+    Scene {
+        particles: Particles::with_positions(pos, vel),
+        walls,
+        domain_min: vec2(case.domain.min),
+        domain_max: vec2(case.domain.max),
+    }
+}
+
+/// Is most of the fluid near this polyline on its right-hand side?
+fn fluid_is_right(points: &[Vec2], closed: bool, fluid: &[(Vec2, Vec2)], reach: Real) -> bool {
+    let n = points.len();
+    let segs = if closed { n } else { n - 1 };
+    let (mut left, mut right) = (0usize, 0usize);
+    for (p, _) in fluid {
+        let mut best = (Real::INFINITY, 0.0);
+        for k in 0..segs {
+            let (a, b) = (points[k], points[(k + 1) % n]);
+            let d = (closest_on_segment(*p, a, b) - p).norm();
+            if d < best.0 {
+                best = (d, cross(b - a, p - a));
+            }
+        }
+        if best.0 < reach {
+            if best.1 > 0.0 {
+                left += 1;
+            } else {
+                right += 1;
+            }
+        }
+    }
+    right > left
+}

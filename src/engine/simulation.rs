@@ -1,0 +1,175 @@
+//! The state of one simulation and what it reports each step. No globals: a job
+//! server runs many of these side by side.
+
+use super::math::{vec2, Real, Vec2};
+use super::neighbors::NeighborList;
+use super::params::MpsParameters;
+use super::particles::Particles;
+use super::scene::{build_scene, Scene};
+use super::walls::{WallContacts, WallObject};
+use crate::case::{Case, Scheme};
+
+/// Why a run stopped early.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+pub enum SimError {
+    #[error("step {step}, t = {time:.6} s: {what} at particle {particle} ({x:.4}, {y:.4})")]
+    Diverged { step: u64, time: Real, particle: usize, x: Real, y: Real, what: String },
+    #[error("step {step}, t = {time:.6} s: pressure solve failed: {reason}")]
+    Solver { step: u64, time: Real, reason: String },
+    #[error("step {step}, t = {time:.6} s: all fluid particles left the domain")]
+    NoParticles { step: u64, time: Real },
+    #[error("cancelled at step {step}, t = {time:.6} s")]
+    Cancelled { step: u64, time: Real },
+}
+
+/// Force and moment the fluid exerted on one wall object during the last step.
+#[derive(Debug, Clone, Copy, Default, PartialEq)]
+pub struct WallLoad {
+    /// N/m
+    pub force: Vec2,
+    /// N·m/m about the object's centre of mass (fixed walls: about the origin).
+    pub moment: Real,
+    /// Share of `force` from the pressure (wall gradient) terms.
+    pub pressure_force: Vec2,
+    /// Share of `force` from the repulsion / collision safety net.
+    pub repulsion_force: Vec2,
+    /// Share from wall viscosity.
+    pub viscous_force: Vec2,
+}
+
+/// Wall-clock seconds spent in each stage (accumulated over the run).
+#[derive(Debug, Clone, Copy, Default, PartialEq, serde::Serialize)]
+pub struct StageTimes {
+    pub explicit_forces: f64,
+    pub neighbors: f64,
+    pub walls: f64,
+    pub number_density: f64,
+    pub assemble: f64,
+    pub solve: f64,
+    pub correct: f64,
+    pub spacing: f64,
+    pub bookkeeping: f64,
+}
+
+impl StageTimes {
+    pub fn total(&self) -> f64 {
+        self.explicit_forces
+            + self.neighbors
+            + self.walls
+            + self.number_density
+            + self.assemble
+            + self.solve
+            + self.correct
+            + self.spacing
+            + self.bookkeeping
+    }
+}
+
+/// What one step did.
+#[derive(Debug, Clone, Copy, Default)]
+pub struct StepInfo {
+    pub dt: Real,
+    pub solver_iterations: usize,
+    pub solver_residual: Real,
+    pub unknowns: usize,
+    pub max_speed: Real,
+    pub removed: usize,
+}
+
+pub struct Simulation {
+    pub params: MpsParameters,
+    pub scheme: Scheme,
+    pub particles: Particles,
+    pub walls: Vec<WallObject>,
+    pub time: Real,
+    pub steps: u64,
+    pub domain_min: Vec2,
+    pub domain_max: Vec2,
+    pub removed: usize,
+    pub cfl: Real,
+    pub max_dt: Real,
+    /// Speed above which the run is declared diverged.
+    pub speed_limit: Real,
+    /// Loads of the last step, one per wall object.
+    pub loads: Vec<WallLoad>,
+    pub stage_times: StageTimes,
+    pub total_solver_iterations: u64,
+    pub(crate) neighbors: NeighborList,
+    pub(crate) contacts: WallContacts,
+    pub(crate) scratch: super::step::Scratch,
+}
+
+impl Simulation {
+    /// Build the initial state of a (validated) case.
+    pub fn new(case: &Case) -> Self {
+        let params = MpsParameters::new(case);
+        let Scene { particles, walls, domain_min, domain_max } = build_scene(case, &params);
+        let g = vec2(case.fluid.gravity).norm();
+        let height = (domain_max.y - domain_min.y).max(domain_max.x - domain_min.x);
+        let mut fastest: Real = particles.velocity.iter().map(|v| v.norm()).fold(0.0, Real::max);
+        for w in &walls {
+            fastest = fastest.max(w.state.velocity.norm());
+        }
+        let speed_limit = case.scheme.max_speed.unwrap_or(10.0 * ((2.0 * g * height).sqrt() + fastest) + 1.0);
+        let n_walls = walls.len();
+        let mut sim = Self {
+            params,
+            scheme: case.scheme.clone(),
+            particles,
+            walls,
+            time: 0.0,
+            steps: 0,
+            domain_min,
+            domain_max,
+            removed: 0,
+            cfl: case.time.cfl,
+            max_dt: case.time.max_dt,
+            speed_limit,
+            loads: vec![WallLoad::default(); n_walls],
+            stage_times: StageTimes::default(),
+            total_solver_iterations: 0,
+            neighbors: NeighborList::default(),
+            contacts: WallContacts::default(),
+            scratch: Default::default(),
+        };
+        sim.initialize();
+        sim
+    }
+
+    /// Number of fluid particles now.
+    pub fn particle_count(&self) -> usize {
+        self.particles.len()
+    }
+
+    /// Largest particle speed now.
+    pub fn max_particle_speed(&self) -> Real {
+        self.particles.velocity.iter().map(|v| v.norm()).fold(0.0, Real::max)
+    }
+
+    /// The next time step: dt = min(cfl l0 / u_max, viscous limit, max_dt).
+    pub fn next_dt(&self) -> Real {
+        let mut u = self.max_particle_speed();
+        for w in &self.walls {
+            u = u.max(w.state.velocity.norm());
+        }
+        let l0 = self.params.l0;
+        let mut dt = self.max_dt;
+        if u > 0.0 {
+            dt = dt.min(self.cfl * l0 / u);
+        }
+        if self.params.viscosity > 0.0 {
+            dt = dt.min(0.2 * l0 * l0 / self.params.viscosity);
+        }
+        let g = vec2(self.params.gravity).norm();
+        if g > 0.0 {
+            // a particle starting from rest should not fall more than cfl * l0 in a step
+            dt = dt.min((2.0 * self.cfl * l0 / g).sqrt());
+        }
+        dt
+    }
+
+    /// Names of the wall objects (fixed walls first, then bodies), as in `loads`.
+    pub fn wall_names(&self) -> Vec<String> {
+        self.walls.iter().map(|w| w.name.clone()).collect()
+    }
+}

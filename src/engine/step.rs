@@ -1,0 +1,664 @@
+//! One projection step of semi-implicit MPS, as a list of named stages.
+//!
+//! Default scheme (MPS-HS-HL-ECS with the CMPS gradient, papers 003 and 004):
+//! explicit viscosity and gravity give u*, x*; the pressure Poisson equation with the
+//! higher-order source plus error-compensating terms is solved on x* with the
+//! (lattice-normalised) higher-order Laplacian; the antisymmetric gradient corrects
+//! velocity and position. Walls enter through the virtual-lattice sums of `walls`.
+//!
+//! Walls and the pressure equation (our formulation): virtual wall points take the
+//! particle's pressure extrapolated with the Neumann condition,
+//! p_k = p_i + c_i · (x_k - x_i), with
+//! c_i = (rho/dt) min(0, (u*_i - u_w)·n) n + rho ((g - a_w) - ((g - a_w)·n) n):
+//! the normal part is the kinematic condition (it stops the particle's approach to the
+//! wall in one step, which for fluid at rest is rho g·n, the hydrostatic gradient), the
+//! tangential part carries gravity and the wall acceleration along the wall. The wall
+//! therefore adds no unknowns and no matrix entries, only right-hand-side terms, and
+//! the same extrapolation gives the wall part of the gradient, whose reaction is the
+//! load on the wall. With the PND source (classic scheme) virtual points take p_i
+//! (Harada et al. 2008) and the wall acts through the number density alone.
+
+use super::kernel::Kernel;
+use super::math::{vec2, Real, Vec2};
+use super::neighbors::NeighborList;
+use super::pressure::{self, CsrMatrix, SolveParams};
+use super::simulation::{SimError, Simulation, StepInfo, WallLoad};
+use super::walls::{moment_about, PlacedWall, WallContacts, WallKernels, WallWeights};
+use crate::case::{GradientKind, LaplacianKind, SourceKind, SpacingControl};
+use crate::with_kernel;
+use rayon::prelude::*;
+use std::marker::PhantomData;
+use std::time::Instant;
+
+/// Buffers reused from step to step.
+#[derive(Debug, Default)]
+pub(crate) struct Scratch {
+    x_star: Vec<Vec2>,
+    n_star: Vec<Real>,
+    div_star: Vec<Real>,
+    unknown_of: Vec<u32>,
+    particle_of: Vec<u32>,
+    rhs: Vec<Real>,
+    solution: Vec<Real>,
+    neumann: Vec<Vec2>,
+    gradient: Vec<Vec2>,
+    matrix: CsrMatrix,
+}
+
+struct KernelWeights<K> {
+    re: Real,
+    re_lap: Real,
+    classic_laplacian: bool,
+    _k: PhantomData<K>,
+}
+
+impl<K: Kernel> KernelWeights<K> {
+    fn new(sim: &Simulation) -> Self {
+        Self {
+            re: sim.params.re,
+            re_lap: sim.params.re_lap,
+            classic_laplacian: sim.scheme.laplacian == LaplacianKind::Classic,
+            _k: PhantomData,
+        }
+    }
+    #[inline]
+    fn laplacian(&self, r: Real) -> Real {
+        if self.classic_laplacian { K::w(r, self.re_lap) } else { K::hl(r, self.re_lap) }
+    }
+}
+
+impl<K: Kernel> WallWeights for KernelWeights<K> {
+    fn w(&self, r: Real) -> Real {
+        K::w(r, self.re)
+    }
+    fn dw(&self, r: Real) -> Real {
+        K::dw(r, self.re)
+    }
+    fn lap(&self, r: Real) -> Real {
+        self.laplacian(r)
+    }
+}
+
+fn wall_kernels(sim: &Simulation) -> WallKernels {
+    WallKernels { l0: sim.params.l0, re: sim.params.re, re_lap: sim.params.re_lap }
+}
+
+fn placed_walls(sim: &Simulation, dt: Real) -> Vec<PlacedWall> {
+    sim.walls.iter().map(|w| PlacedWall::new(w, w.state.advanced(dt))).collect()
+}
+
+fn seconds(t: &mut Instant) -> f64 {
+    let now = Instant::now();
+    let s = (now - *t).as_secs_f64();
+    *t = now;
+    s
+}
+
+impl Simulation {
+    /// Neighbours, wall contacts, number density and divergence of the initial state.
+    pub(crate) fn initialize(&mut self) {
+        with_kernel!(self.scheme.kernel, K => initialize::<K>(self))
+    }
+
+    /// Advance by `dt`. Body wall states must hold the pose and velocity at the start of
+    /// the step; they are advanced kinematically (the coupling may overwrite them after).
+    pub fn step(&mut self, dt: Real) -> Result<StepInfo, SimError> {
+        with_kernel!(self.scheme.kernel, K => step::<K>(self, dt))
+    }
+}
+
+fn initialize<K: Kernel>(sim: &mut Simulation) {
+    let reach = sim.params.re.max(sim.params.re_lap);
+    sim.neighbors = NeighborList::build(&sim.particles.position, reach);
+    let walls = placed_walls(sim, 0.0);
+    let weights = KernelWeights::<K>::new(sim);
+    sim.contacts = WallContacts::build(&sim.particles.position, &walls, &wall_kernels(sim), &weights);
+    let n = number_density::<K>(&sim.particles.position, &sim.neighbors, &sim.contacts, sim.params.re);
+    let div = divergence::<K>(&sim.particles.position, &sim.particles.velocity, &sim.neighbors, sim.params.re, sim.params.divergence_coefficient);
+    sim.particles.number_density = n;
+    sim.particles.number_density_rate = div;
+}
+
+/// The step, stage by stage.
+fn step<K: Kernel>(sim: &mut Simulation, dt: Real) -> Result<StepInfo, SimError> {
+    let mut clock = Instant::now();
+    let weights = KernelWeights::<K>::new(sim);
+
+    // u* = u + dt (g + nu ∇²u); x* = x + dt u*  (paper 003 eqs. 9-10)
+    apply_explicit_forces::<K>(sim, &weights, dt);
+    predict_positions(sim, dt);
+    sim.stage_times.explicit_forces += seconds(&mut clock);
+
+    // neighbours at x*, walls at their predicted pose
+    update_neighbors(sim);
+    sim.stage_times.neighbors += seconds(&mut clock);
+    let walls = placed_walls(sim, dt);
+    sim.contacts = WallContacts::build(&sim.scratch.x_star, &walls, &wall_kernels(sim), &weights);
+    sim.stage_times.walls += seconds(&mut clock);
+
+    // n* with the wall lattice (Harada et al. 2008); free surface (PND + distribution)
+    compute_number_density::<K>(sim);
+    detect_free_surface::<K>(sim);
+    sim.stage_times.number_density += seconds(&mut clock);
+
+    // PPE: source (HS + ECS, paper 004 eqs. 3, 10-11), Laplacian (HL, eq. 9), Neumann walls
+    compute_neumann_gradients(sim, dt);
+    assemble_pressure_equation::<K>(sim, &weights, dt);
+    sim.stage_times.assemble += seconds(&mut clock);
+    let (iterations, residual) = solve_pressure(sim)?;
+    sim.stage_times.solve += seconds(&mut clock);
+
+    // u^{n+1} = u* - dt/rho ∇p, x^{n+1} = x* + dt (u^{n+1} - u*); wall loads as reactions
+    let mut loads = vec![WallLoad::default(); sim.walls.len()];
+    correct_velocity_and_position::<K>(sim, &walls, dt, &mut loads);
+    sim.stage_times.correct += seconds(&mut clock);
+    keep_particles_apart(sim, &walls, dt, &mut loads);
+    sim.stage_times.spacing += seconds(&mut clock);
+
+    // n and ∇·u at the end of the step, for the error-compensating source
+    update_number_density_and_divergence::<K>(sim);
+    for (w, load) in loads.iter_mut().enumerate() {
+        let _ = w;
+        load.force = load.pressure_force + load.repulsion_force + load.viscous_force + load.force;
+    }
+    sim.loads = loads;
+    for wall in &mut sim.walls {
+        wall.state = wall.state.advanced(dt);
+    }
+    sim.time += dt;
+    sim.steps += 1;
+    sim.total_solver_iterations += iterations as u64;
+    let removed = remove_particles_outside_domain(sim);
+    let max_speed = check_health(sim)?;
+    sim.stage_times.bookkeeping += seconds(&mut clock);
+    Ok(StepInfo { dt, solver_iterations: iterations, solver_residual: residual, unknowns: sim.scratch.matrix.n, max_speed, removed })
+}
+
+/// Gravity and (when nu > 0) viscosity with no-slip walls.
+fn apply_explicit_forces<K: Kernel>(sim: &mut Simulation, weights: &KernelWeights<K>, dt: Real) {
+    let g = vec2(sim.params.gravity);
+    let nu = sim.params.viscosity;
+    if nu <= 0.0 {
+        sim.particles.velocity.par_iter_mut().for_each(|u| *u += g * dt);
+        return;
+    }
+    let c = sim.params.laplacian_coefficient;
+    let (x, u) = (&sim.particles.position, &sim.particles.velocity);
+    let (nb, contacts) = (&sim.neighbors, &sim.contacts);
+    // a particle created after the last neighbour search has no list yet
+    let accel: Vec<(Vec2, Vec2)> = (0..x.len())
+        .into_par_iter()
+        .map(|i| {
+            if i >= nb.len() {
+                return (g, Vec2::zeros());
+            }
+            let mut lap = Vec2::zeros();
+            for &j in nb.of(i) {
+                let j = j as usize;
+                let r = (x[j] - x[i]).norm();
+                lap += (u[j] - u[i]) * weights.laplacian(r);
+            }
+            let mut wall = Vec2::zeros();
+            for ct in contacts.of(i) {
+                // mirror velocity 2 u_w - u_i (no slip)
+                wall += (ct.wall_velocity - u[i]) * (2.0 * ct.terms.laplacian_sum);
+            }
+            (g + (lap + wall) * (nu * c), wall * (nu * c))
+        })
+        .collect();
+    let m = sim.params.particle_mass;
+    for (i, (a, _)) in accel.iter().enumerate() {
+        sim.particles.velocity[i] += a * dt;
+    }
+    for (i, (_, aw)) in accel.iter().enumerate() {
+        if i < sim.neighbors.len() {
+            for ct in sim.contacts.of(i) {
+                // split the wall acceleration between contacts by their Laplacian weight
+                let total: Real = sim.contacts.of(i).iter().map(|c| c.terms.laplacian_sum).sum();
+                if total > 0.0 {
+                    let share = aw * (ct.terms.laplacian_sum / total);
+                    sim.loads[ct.object as usize].viscous_force -= share * m;
+                }
+            }
+        }
+    }
+}
+
+fn predict_positions(sim: &mut Simulation, dt: Real) {
+    let p = &sim.particles;
+    sim.scratch.x_star = p.position.par_iter().zip(p.velocity.par_iter()).map(|(x, u)| x + u * dt).collect();
+}
+
+fn update_neighbors(sim: &mut Simulation) {
+    let reach = sim.params.re.max(sim.params.re_lap);
+    sim.neighbors = NeighborList::build(&sim.scratch.x_star, reach);
+}
+
+fn number_density<K: Kernel>(x: &[Vec2], nb: &NeighborList, contacts: &WallContacts, re: Real) -> Vec<Real> {
+    (0..x.len())
+        .into_par_iter()
+        .map(|i| {
+            let mut n = 0.0;
+            for &j in nb.of(i) {
+                n += K::w((x[j as usize] - x[i]).norm(), re);
+            }
+            n + contacts.of(i).iter().map(|c| c.terms.number_density).sum::<Real>()
+        })
+        .collect()
+}
+
+/// ∇·u ≈ -c Σ w'(r) r̂·(u_j - u_i): the HS form (paper 004 eq. 2), lattice-normalised.
+fn divergence<K: Kernel>(x: &[Vec2], u: &[Vec2], nb: &NeighborList, re: Real, c: Real) -> Vec<Real> {
+    (0..x.len())
+        .into_par_iter()
+        .map(|i| {
+            let mut s = 0.0;
+            for &j in nb.of(i) {
+                let j = j as usize;
+                let r = x[j] - x[i];
+                let d = r.norm();
+                if d > 0.0 && d < re {
+                    s += K::dw(d, re) * r.dot(&(u[j] - u[i])) / d;
+                }
+            }
+            -c * s
+        })
+        .collect()
+}
+
+fn compute_number_density<K: Kernel>(sim: &mut Simulation) {
+    sim.scratch.n_star = number_density::<K>(&sim.scratch.x_star, &sim.neighbors, &sim.contacts, sim.params.re);
+}
+
+/// Free surface: n* < beta n0, confirmed by a one-sided neighbourhood
+/// (|Σ w r/r²| l0 / n above `surface_asymmetry`); below 0.8 n0 always.
+fn detect_free_surface<K: Kernel>(sim: &mut Simulation) {
+    let (x, nb, contacts) = (&sim.scratch.x_star, &sim.neighbors, &sim.contacts);
+    let (n0, re, l0) = (sim.params.n0, sim.params.re, sim.params.l0);
+    let beta = sim.scheme.surface_threshold;
+    let asym_limit = sim.scheme.surface_asymmetry;
+    let n_star = &sim.scratch.n_star;
+    sim.particles.free_surface = (0..x.len())
+        .into_par_iter()
+        .map(|i| {
+            let n = n_star[i];
+            if n >= beta * n0 {
+                return false;
+            }
+            if asym_limit <= 0.0 || n < 0.8 * n0 {
+                return true;
+            }
+            let mut m = Vec2::zeros();
+            for &j in nb.of(i) {
+                let r = x[j as usize] - x[i];
+                let d2 = r.norm_squared();
+                let d = d2.sqrt();
+                if d < re {
+                    m += r * (K::w(d, re) / d2);
+                }
+            }
+            for c in contacts.of(i) {
+                m += c.terms.moment1;
+            }
+            m.norm() * l0 / n.max(1e-12) > asym_limit
+        })
+        .collect();
+}
+
+/// The extrapolation vector c of every wall contact (see the module docs).
+fn compute_neumann_gradients(sim: &mut Simulation, dt: Real) {
+    let rho = sim.params.density;
+    let g = vec2(sim.params.gravity);
+    let kinematic = sim.scheme.source != SourceKind::Pnd;
+    let u = &sim.particles.velocity;
+    let offsets = &sim.contacts.offsets;
+    let contacts = &sim.contacts.contacts;
+    let mut owner = vec![0u32; contacts.len()];
+    for i in 0..offsets.len().saturating_sub(1) {
+        for k in offsets[i]..offsets[i + 1] {
+            owner[k as usize] = i as u32;
+        }
+    }
+    sim.scratch.neumann = contacts
+        .par_iter()
+        .zip(owner.par_iter())
+        .map(|(c, &i)| {
+            if !kinematic {
+                return Vec2::zeros();
+            }
+            let n = c.normal;
+            let approach = (u[i as usize] - c.wall_velocity).dot(&n).min(0.0);
+            let body = g - c.wall_acceleration;
+            let tangential = body - n * body.dot(&n);
+            n * (rho / dt * approach) + tangential * rho
+        })
+        .collect();
+}
+
+fn assemble_pressure_equation<K: Kernel>(sim: &mut Simulation, weights: &KernelWeights<K>, dt: Real) {
+    let np = sim.particles.len();
+    let p = &sim.params;
+    let (rho, n0, c_lap) = (p.density, p.n0, p.laplacian_coefficient);
+    let x = &sim.scratch.x_star;
+    let nb = &sim.neighbors;
+    let surface = &mut sim.particles.free_surface;
+    // a particle with no Laplacian neighbour cannot be solved for: Dirichlet
+    for i in 0..np {
+        if !surface[i] && nb.of(i).iter().all(|&j| weights.laplacian((x[j as usize] - x[i]).norm()) == 0.0) {
+            surface[i] = true;
+        }
+    }
+    let surface = &sim.particles.free_surface;
+    let mut unknown_of = vec![u32::MAX; np];
+    let mut particle_of = Vec::with_capacity(np);
+    for i in 0..np {
+        if !surface[i] {
+            unknown_of[i] = particle_of.len() as u32;
+            particle_of.push(i as u32);
+        }
+    }
+    // source term S of ∇²p - (rho alpha / dt²) p = S
+    let div_star = divergence::<K>(x, &sim.particles.velocity, nb, p.re, p.divergence_coefficient);
+    let n_prev = &sim.particles.number_density;
+    let div_prev = &sim.particles.number_density_rate;
+    let n_star = &sim.scratch.n_star;
+    let source = sim.scheme.source;
+    let gamma = sim.scheme.mixed_relaxation;
+    let source_of = |i: usize| -> Real {
+        match source {
+            SourceKind::Pnd => -rho / (dt * dt) * (n_star[i] - n0) / n0,
+            SourceKind::HigherOrder => rho / dt * div_star[i],
+            SourceKind::HigherOrderEcs => {
+                let dev = (n_prev[i] - n0) / n0;
+                let alpha = dev.abs();
+                let beta = (dt * div_prev[i]).abs();
+                rho / dt * (div_star[i] + alpha * div_prev[i]) - beta * rho / (dt * dt) * dev
+            }
+            SourceKind::Mixed => rho / dt * div_star[i] - gamma * rho / (dt * dt) * (n_prev[i] - n0) / n0,
+        }
+    };
+    let compress = rho * sim.scheme.compressibility / (dt * dt);
+    let contacts = &sim.contacts;
+    let neumann = &sim.scratch.neumann;
+    let nu = particle_of.len();
+    let rows: Vec<(Vec<u32>, Vec<Real>, Real)> = (0..nu)
+        .into_par_iter()
+        .map(|row| {
+            let i = particle_of[row] as usize;
+            let mut cols = Vec::with_capacity(32);
+            let mut vals = Vec::with_capacity(32);
+            let mut diag = compress;
+            for &j in nb.of(i) {
+                let l = c_lap * weights.laplacian((x[j as usize] - x[i]).norm());
+                if l == 0.0 {
+                    continue;
+                }
+                diag += l;
+                let uj = unknown_of[j as usize];
+                if uj != u32::MAX {
+                    cols.push(uj);
+                    vals.push(-l);
+                }
+            }
+            cols.push(row as u32);
+            vals.push(diag);
+            let mut b = -source_of(i);
+            let base = contacts.offsets[i] as usize;
+            for (k, c) in contacts.of(i).iter().enumerate() {
+                b += c_lap * neumann[base + k].dot(&c.terms.laplacian_moment);
+            }
+            (cols, vals, b)
+        })
+        .collect();
+    let mut m = CsrMatrix { n: nu, row_ptr: Vec::with_capacity(nu + 1), col: Vec::new(), val: Vec::new() };
+    m.row_ptr.push(0);
+    let mut rhs = Vec::with_capacity(nu);
+    for (cols, vals, b) in rows {
+        m.col.extend_from_slice(&cols);
+        m.val.extend_from_slice(&vals);
+        m.row_ptr.push(m.col.len());
+        rhs.push(b);
+    }
+    // warm start from the last pressures
+    sim.scratch.solution = particle_of.iter().map(|&i| sim.particles.pressure[i as usize]).collect();
+    sim.scratch.div_star = div_star;
+    sim.scratch.matrix = m;
+    sim.scratch.rhs = rhs;
+    sim.scratch.unknown_of = unknown_of;
+    sim.scratch.particle_of = particle_of;
+}
+
+fn solve_pressure(sim: &mut Simulation) -> Result<(usize, Real), SimError> {
+    let params = SolveParams { tolerance: sim.scheme.solver_tolerance, max_iterations: sim.scheme.solver_max_iterations };
+    let s = &mut sim.scratch;
+    let info = pressure::solve(sim.scheme.solver, &s.matrix, &s.rhs, &mut s.solution, params)
+        .map_err(|e| SimError::Solver { step: sim.steps + 1, time: sim.time, reason: e.to_string() })?;
+    let clip = sim.scheme.clip_negative_pressure;
+    let p = &mut sim.particles.pressure;
+    p.iter_mut().for_each(|v| *v = 0.0);
+    for (row, &i) in s.particle_of.iter().enumerate() {
+        let v = s.solution[row];
+        p[i as usize] = if clip { v.max(0.0) } else { v };
+    }
+    Ok((info.iterations, info.relative_residual))
+}
+
+fn correct_velocity_and_position<K: Kernel>(sim: &mut Simulation, walls: &[PlacedWall], dt: Real, loads: &mut [WallLoad]) {
+    let prm = &sim.params;
+    let (re, rho, c_grad, m) = (prm.re, prm.density, prm.gradient_coefficient, prm.particle_mass);
+    let x = &sim.scratch.x_star;
+    let p = &sim.particles.pressure;
+    let nb = &sim.neighbors;
+    let n = x.len();
+    // minimum pressure over each neighbourhood (stability of the gradient)
+    let p_min: Vec<Real> = (0..n)
+        .into_par_iter()
+        .map(|i| {
+            nb.of(i).iter().filter(|&&j| (x[j as usize] - x[i]).norm() < re).map(|&j| p[j as usize]).fold(p[i], Real::min)
+        })
+        .collect();
+    let antisymmetric = sim.scheme.gradient == GradientKind::Cmps;
+    let k_form = if antisymmetric { 2.0 } else { 1.0 };
+    let contacts = &sim.contacts;
+    let neumann = &sim.scratch.neumann;
+    // fluid part of the gradient, then the wall part per contact
+    let grads: Vec<Vec2> = (0..n)
+        .into_par_iter()
+        .map(|i| {
+            let mut g = Vec2::zeros();
+            for &j in nb.of(i) {
+                let j = j as usize;
+                let r = x[j] - x[i];
+                let d2 = r.norm_squared();
+                let d = d2.sqrt();
+                if d >= re || d == 0.0 {
+                    continue;
+                }
+                let dp = if antisymmetric { p[i] + p[j] - p_min[i] - p_min[j] } else { p[j] - p_min[i] };
+                g += r * (dp * K::w(d, re) / d2);
+            }
+            g * c_grad
+        })
+        .collect();
+    let wall_grads: Vec<Vec2> = contacts
+        .contacts
+        .par_iter()
+        .enumerate()
+        .map(|(k, c)| {
+            let _ = k;
+            Vec2::zeros() + c.terms.moment2_times(neumann[k]) * c_grad
+        })
+        .collect();
+    let mut total = grads;
+    for i in 0..n {
+        let base = contacts.offsets[i] as usize;
+        for (k, c) in contacts.of(i).iter().enumerate() {
+            let gw = c.terms.moment1 * (k_form * (p[i] - p_min[i]) * c_grad) + wall_grads[base + k];
+            total[i] += gw;
+            // reaction on the wall: F = -m a_wall = m/rho ∇p_wall
+            let f = gw * (m / rho);
+            let load = &mut loads[c.object as usize];
+            load.pressure_force += f;
+            load.moment += moment_about(walls[c.object as usize].state.center_of_mass, c.point, f);
+        }
+    }
+    let scale = dt / rho;
+    let parts = &mut sim.particles;
+    parts.velocity.par_iter_mut().zip(total.par_iter()).for_each(|(u, g)| *u -= g * scale);
+    parts
+        .position
+        .par_iter_mut()
+        .zip(x.par_iter())
+        .zip(total.par_iter())
+        .for_each(|((pos, xs), g)| *pos = xs - g * (scale * dt));
+    sim.scratch.gradient = total;
+}
+
+/// Safety net: pairwise collision below `collision_distance` l0 and an inelastic
+/// wall impulse below `wall_repulsion_distance` l0 (textbook values 0.5 and e = 0.2).
+fn keep_particles_apart(sim: &mut Simulation, walls: &[PlacedWall], dt: Real, loads: &mut [WallLoad]) {
+    let l0 = sim.params.l0;
+    let e = sim.scheme.collision_restitution;
+    let m = sim.params.particle_mass;
+    let n = sim.particles.len();
+    if sim.scheme.spacing_control == SpacingControl::Collision {
+        let rc = sim.scheme.collision_distance * l0;
+        let (x, u, nb) = (&sim.particles.position, &sim.particles.velocity, &sim.neighbors);
+        let du: Vec<Vec2> = (0..n)
+            .into_par_iter()
+            .map(|i| {
+                let mut d = Vec2::zeros();
+                for &j in nb.of(i) {
+                    let j = j as usize;
+                    let r = x[j] - x[i];
+                    let dist = r.norm();
+                    if dist < rc && dist > 0.0 {
+                        let rh = r / dist;
+                        let vn = (u[j] - u[i]).dot(&rh);
+                        if vn < 0.0 {
+                            d += rh * (0.5 * (1.0 + e) * vn);
+                        }
+                    }
+                }
+                d
+            })
+            .collect();
+        let parts = &mut sim.particles;
+        for i in 0..n {
+            parts.velocity[i] += du[i];
+            parts.position[i] += du[i] * dt;
+        }
+    }
+    let rw = sim.scheme.wall_repulsion_distance * l0;
+    if rw > 0.0 {
+        for i in 0..n {
+            for c in sim.contacts.of(i) {
+                if c.distance >= rw && !c.penetrated {
+                    continue;
+                }
+                let u = sim.particles.velocity[i];
+                let vn = (u - c.wall_velocity).dot(&c.normal);
+                let mut du = Vec2::zeros();
+                if vn < 0.0 {
+                    du = -c.normal * ((1.0 + e) * vn);
+                }
+                sim.particles.velocity[i] += du;
+                let mut pos = sim.particles.position[i] + du * dt;
+                if c.penetrated {
+                    // back outside, half the safety distance off the surface
+                    pos = c.point + c.normal * (0.5 * rw);
+                }
+                sim.particles.position[i] = pos;
+                let f = -du * (m / dt);
+                let load = &mut loads[c.object as usize];
+                load.repulsion_force += f;
+                load.moment += moment_about(walls[c.object as usize].state.center_of_mass, c.point, f);
+            }
+        }
+    }
+}
+
+fn update_number_density_and_divergence<K: Kernel>(sim: &mut Simulation) {
+    let re = sim.params.re;
+    let (x, xs, nb, contacts) = (&sim.particles.position, &sim.scratch.x_star, &sim.neighbors, &sim.contacts);
+    let n: Vec<Real> = (0..x.len())
+        .into_par_iter()
+        .map(|i| {
+            let mut s = 0.0;
+            for &j in nb.of(i) {
+                s += K::w((x[j as usize] - x[i]).norm(), re);
+            }
+            for c in contacts.of(i) {
+                s += c.terms.number_density + c.terms.number_density_gradient.dot(&(x[i] - xs[i]));
+            }
+            s
+        })
+        .collect();
+    let div = divergence::<K>(x, &sim.particles.velocity, nb, re, sim.params.divergence_coefficient);
+    sim.particles.number_density = n;
+    sim.particles.number_density_rate = div;
+}
+
+fn remove_particles_outside_domain(sim: &mut Simulation) -> usize {
+    let (lo, hi) = (sim.domain_min, sim.domain_max);
+    let keep: Vec<bool> = sim.particles.position.iter().map(|p| p.x >= lo.x && p.y >= lo.y && p.x <= hi.x && p.y <= hi.y).collect();
+    let removed = keep.iter().filter(|k| !**k).count();
+    if removed > 0 {
+        sim.particles.retain(&keep);
+        sim.removed += removed;
+        // lists index particles: rebuild them for the next step's explicit stage
+        let reach = sim.params.re.max(sim.params.re_lap);
+        sim.neighbors = NeighborList::build(&sim.particles.position, reach);
+        let keep_contacts = {
+            let mut offsets = vec![0u32];
+            let mut contacts = Vec::new();
+            for (i, k) in keep.iter().enumerate() {
+                if *k {
+                    contacts.extend_from_slice(sim.contacts.of(i));
+                    offsets.push(contacts.len() as u32);
+                }
+            }
+            WallContacts { offsets, contacts }
+        };
+        sim.contacts = keep_contacts;
+    }
+    removed
+}
+
+/// Non-finite values, runaway speed or collapsed number density end the run.
+fn check_health(sim: &Simulation) -> Result<Real, SimError> {
+    let p = &sim.particles;
+    let fail = |i: usize, what: String| SimError::Diverged {
+        step: sim.steps,
+        time: sim.time,
+        particle: i,
+        x: p.position[i].x,
+        y: p.position[i].y,
+        what,
+    };
+    if p.is_empty() {
+        return Err(SimError::NoParticles { step: sim.steps, time: sim.time });
+    }
+    let mut max_speed: Real = 0.0;
+    for i in 0..p.len() {
+        let (x, u) = (p.position[i], p.velocity[i]);
+        if !(x.x.is_finite() && x.y.is_finite()) {
+            return Err(fail(i, "non-finite position".into()));
+        }
+        if !(u.x.is_finite() && u.y.is_finite()) {
+            return Err(fail(i, "non-finite velocity".into()));
+        }
+        if !p.pressure[i].is_finite() {
+            return Err(fail(i, "non-finite pressure".into()));
+        }
+        let s = u.norm();
+        if s > sim.speed_limit {
+            return Err(fail(i, format!("runaway velocity {s:.3} m/s (limit {:.3} m/s)", sim.speed_limit)));
+        }
+        if p.number_density[i] > 4.0 * sim.params.n0 {
+            return Err(fail(i, format!("particle number density collapsed to {:.2} n0", p.number_density[i] / sim.params.n0)));
+        }
+        max_speed = max_speed.max(s);
+    }
+    Ok(max_speed)
+}

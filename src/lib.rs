@@ -1,0 +1,7 @@
+//! mpsfsi: a 2D moving-particle semi-implicit (MPS) engine with polygon walls and
+//! rigid bodies, and a job service that returns the loads water puts on them.
+//!
+//! Data flows one way: [`case`] -> [`engine`] scene -> step pipeline -> [`output`].
+
+pub mod case;
+pub mod engine;
