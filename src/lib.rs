@@ -5,3 +5,6 @@
 
 pub mod case;
 pub mod engine;
+pub mod coupling;
+pub mod output;
+pub mod run;
