@@ -125,6 +125,9 @@ pub struct Scheme {
     /// Free surface only if the neighbour distribution is also one-sided: |sum w r_ij| / sum w > this * l0.
     /// Zero disables the check.
     pub surface_asymmetry: f64,
+    /// Weight of the minimum-pressure repulsion (p_i - p̂_i) Σ r w / r² added to the
+    /// corrected gradient: 0 is pure GC, 1 makes it the classic gradient's stabilising part.
+    pub gradient_stabilization: f64,
     /// Clip negative pressures to zero after the solve.
     pub clip_negative_pressure: bool,
     /// Free-surface particles take the pressure of a surface half a spacing beyond them
@@ -159,6 +162,7 @@ impl Default for Scheme {
             laplacian_radius: None,
             surface_threshold: 0.97,
             surface_asymmetry: 0.2,
+            gradient_stabilization: 0.5,
             clip_negative_pressure: true,
             surface_offset: true,
             mixed_relaxation: 0.01,

@@ -285,6 +285,9 @@ fn detect_free_surface<K: Kernel>(sim: &mut Simulation) {
     let n_star = &sim.scratch.n_star;
     let grad_prev = &sim.scratch.gradient;
     let offset = sim.scheme.surface_offset;
+    // capped at twice the value at rest: the correction removes the O(l0/H) bias of calm
+    // water; in violent flow an uncapped gradient feeds back into itself
+    let cap = sim.params.density * vec2(sim.params.gravity).norm() * l0;
     // (is surface, Dirichlet value): the surface lies half a spacing beyond the particle,
     // so its pressure is the previous step's gradient times l0/2 along the outward normal
     // (rho g l0 / 2 at rest).
@@ -313,7 +316,7 @@ fn detect_free_surface<K: Kernel>(sim: &mut Simulation) {
                 return (false, 0.0);
             }
             let value = match (offset, grad_prev.get(i)) {
-                (true, Some(g)) if m.norm() > 0.0 => (g.dot(&(m / m.norm())) * 0.5 * l0).max(0.0),
+                (true, Some(g)) if m.norm() > 0.0 => (g.dot(&(m / m.norm())) * 0.5 * l0).clamp(0.0, cap),
                 _ => 0.0,
             };
             (true, value)
@@ -474,6 +477,7 @@ fn correct_velocity_and_position<K: Kernel>(sim: &mut Simulation, walls: &[Place
         })
         .collect();
     let form = sim.scheme.gradient;
+    let kappa = sim.scheme.gradient_stabilization;
     let contacts = &sim.contacts;
     let neumann = &sim.scratch.neumann;
     // The gradient that moves the particles (fluid neighbours + virtual wall points).
@@ -520,8 +524,11 @@ fn correct_velocity_and_position<K: Kernel>(sim: &mut Simulation, walls: &[Place
                     let mm = moment / n0;
                     let det = mm.determinant();
                     let lattice_det = (1.0 / crate::engine::params::DIM).powi(2);
+                    // plus the repulsive part of the minimum-pressure form, (p_i - p̂_i) Σ r w / r²,
+                    // zero on a regular neighbourhood, pushing particles apart where they cluster
+                    let stabilizer = (s_min - s_fluid + wall_m1 * (p[i] - p_min[i])) * (kappa * c_grad);
                     match mm.try_inverse() {
-                        Some(c) if det > 0.3 * lattice_det => c * (s_fluid + wall_linear) / n0,
+                        Some(c) if det > 0.3 * lattice_det => c * (s_fluid + wall_linear) / n0 + stabilizer,
                         _ => classic,
                     }
                 }
