@@ -3,5 +3,6 @@
 //!
 //! Data flows one way: [`case`] -> [`engine`] scene -> step pipeline -> [`output`].
 
+pub mod bench;
 pub mod case;
 pub mod engine;
