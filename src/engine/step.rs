@@ -21,6 +21,7 @@
 use super::kernel::Kernel;
 use super::math::{vec2, Real, Vec2};
 use super::neighbors::NeighborList;
+use super::operators::{gradient_row, laplacian_row, Cloud, LatticeConstants, Normalisation};
 use super::pressure::{self, CsrMatrix, SolveParams};
 use super::simulation::{SimError, Simulation, StepInfo, WallLoad};
 use super::walls::{moment_about, PlacedWall, WallContacts, WallKernels, WallWeights};
@@ -57,7 +58,8 @@ impl<K: Kernel> KernelWeights<K> {
         Self {
             re: sim.params.re,
             re_lap: sim.params.re_lap,
-            classic_laplacian: sim.scheme.laplacian == LaplacianKind::Classic,
+            // Imoto's second-order Laplacian is the classic one (paper 000 Theorem 3.1)
+            classic_laplacian: matches!(sim.scheme.laplacian, LaplacianKind::Classic | LaplacianKind::SecondOrder),
             _k: PhantomData,
         }
     }
@@ -379,6 +381,13 @@ fn assemble_pressure_equation<K: Kernel>(sim: &mut Simulation, weights: &KernelW
     };
     let compress = rho * sim.scheme.compressibility / (dt * dt);
     let contacts = &sim.contacts;
+    // CHL, anisotropic and least-squares rows come from engine::operators for particles
+    // away from walls; rows with wall contacts keep the tabulated (HL/classic) form,
+    // which carries the Neumann condition, with the same lattice normalisation.
+    let kind = sim.scheme.laplacian;
+    let operator_rows = !kind.is_symmetric();
+    let cloud = Cloud::new(x, nb, p.re_lap);
+    let lattice = Normalisation::Reference(LatticeConstants::compute::<K>(p.l0, p.re_lap, 2));
     let neumann = &sim.scratch.neumann;
     let nu = particle_of.len();
     let rows: Vec<(Vec<u32>, Vec<Real>, Real)> = (0..nu)
@@ -388,6 +397,19 @@ fn assemble_pressure_equation<K: Kernel>(sim: &mut Simulation, weights: &KernelW
             let mut cols = Vec::with_capacity(32);
             let mut vals = Vec::with_capacity(32);
             let mut diag = compress;
+            if operator_rows && contacts.of(i).is_empty() {
+                for (j, c) in laplacian_row::<K>(kind, &cloud, lattice, i).off_diagonal {
+                    diag += c;
+                    let uj = unknown_of[j];
+                    if uj != u32::MAX {
+                        cols.push(uj);
+                        vals.push(-c);
+                    }
+                }
+                cols.push(row as u32);
+                vals.push(diag);
+                return (cols, vals, -source_of(i));
+            }
             for &j in nb.of(i) {
                 let l = c_lap * weights.laplacian((x[j as usize] - x[i]).norm());
                 if l == 0.0 {
@@ -461,10 +483,20 @@ fn correct_velocity_and_position<K: Kernel>(sim: &mut Simulation, walls: &[Place
     let k_form = if antisymmetric { 2.0 } else { 1.0 };
     let contacts = &sim.contacts;
     let neumann = &sim.scratch.neumann;
+    // GC, anisotropic and least-squares gradients (engine::operators) with the minimum
+    // pressure, for particles away from walls; near walls the classic form, whose wall
+    // part the tabulated moments give.
+    let kind = sim.scheme.gradient;
+    let operator_gradient = matches!(kind, GradientKind::Corrected | GradientKind::Anisotropic | GradientKind::LeastSquares);
+    let cloud = Cloud::new(x, nb, re);
+    let lattice = Normalisation::Reference(LatticeConstants::compute::<K>(prm.l0, re, 2));
     // fluid part of the gradient, then the wall part per contact
     let grads: Vec<Vec2> = (0..n)
         .into_par_iter()
         .map(|i| {
+            if operator_gradient && contacts.of(i).is_empty() {
+                return gradient_row::<K>(kind, &cloud, lattice, i).iter().map(|&(j, g)| g * (p[j] - p_min[i])).sum();
+            }
             let mut g = Vec2::zeros();
             for &j in nb.of(i) {
                 let j = j as usize;

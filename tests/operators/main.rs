@@ -3,6 +3,7 @@
 
 mod convergence;
 mod diffusion;
+mod engine_variants;
 mod dirichlet_1d;
 mod manufactured_ppe;
 mod spacing_1d;
