@@ -6,4 +6,5 @@ mod diffusion;
 mod engine_variants;
 mod dirichlet_1d;
 mod manufactured_ppe;
+mod rows;
 mod spacing_1d;
