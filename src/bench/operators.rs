@@ -175,6 +175,8 @@ impl StudiedOperator {
     pub fn name(self) -> String {
         let snake = |s: String| s.trim_matches('"').to_string();
         match self {
+            // evaluated in its linear form (see `relative_error`)
+            StudiedOperator::Gradient(GradientKind::MinimumPressure | GradientKind::Cmps) => "gradient/classic (eq. 13)".into(),
             StudiedOperator::Gradient(k) => format!("gradient/{}", snake(serde_json::to_string(&k).unwrap_or_default())),
             StudiedOperator::Laplacian(k) => format!("laplacian/{}", snake(serde_json::to_string(&k).unwrap_or_default())),
             StudiedOperator::RegularSecondDerivative => "second_derivative/regular (eq. 26)".into(),
