@@ -6,3 +6,6 @@
 pub mod bench;
 pub mod case;
 pub mod engine;
+pub mod coupling;
+pub mod output;
+pub mod run;

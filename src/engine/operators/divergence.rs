@@ -1,6 +1,6 @@
 //! Divergence of a vector field matching each gradient: ⟨∇·u⟩_i = Σ_j g_ij · u_ij with
-//! the gradient's own coefficients g_ij (see `gradient`). For the minimum-pressure and
-//! CMPS kinds this is the classic MPS divergence (d/n) Σ u_ij · r_ij w / r²
+//! the gradient's own coefficients g_ij (see `gradient`). For the minimum-pressure,
+//! CMPS and symmetric kinds this is the classic MPS divergence (d/n) Σ u_ij · r_ij w / r²
 //! (Koshizuka & Oka 1996; paper 003 eq. 14); for GC the corrected one (paper 003
 //! eq. 22 applied componentwise); for the anisotropic and least-squares kinds the trace
 //! of their gradient of u.

@@ -5,7 +5,8 @@
 //!   g_ij = (d / n) r_ij w / r², n = n0 or n_i by [`Normalisation`]. Used by
 //!   [`GradientKind::MinimumPressure`] with f_ij replaced by f_j - f̂_i, f̂_i the minimum
 //!   of f over i and its neighbours (stability), and by [`GradientKind::Cmps`] with the
-//!   antisymmetric (f_i + f_j) - (f̂_i + f̂_j) (Khayyer & Gotoh 2008; paper 003 eq. 20).
+//!   antisymmetric (f_i + f_j) - (f̂_i + f̂_j) (Khayyer & Gotoh 2008; paper 003 eq. 19),
+//!   and by [`GradientKind::Symmetric`] with f_i + f_j (the SPH-like pair form).
 //! - corrected GC (paper 004 eqs. 12-13, paper 003 eqs. 21-22): g_ij = A_i⁻¹ r_ij w / r²
 //!   with A_i = Σ w r rᵀ / r²: exact for linear fields on any cloud. Where A_i is
 //!   ill-conditioned (splash, few neighbours, a one-sided line of neighbours) the
@@ -43,10 +44,10 @@ fn classic_row<K: Kernel>(cloud: &Cloud, norm: Normalisation, i: usize) -> Gradi
 }
 
 /// The vector coefficients g_ij of particle i's gradient (the classic one for the
-/// minimum-pressure and CMPS kinds, whose pressure shift [`gradient`] applies).
+/// minimum-pressure, CMPS and symmetric kinds, whose pressure shift [`gradient`] applies).
 pub fn gradient_row<K: Kernel>(kind: GradientKind, cloud: &Cloud, norm: Normalisation, i: usize) -> GradientRow {
     match kind {
-        GradientKind::MinimumPressure | GradientKind::Cmps => classic_row::<K>(cloud, norm, i),
+        GradientKind::MinimumPressure | GradientKind::Cmps | GradientKind::Symmetric => classic_row::<K>(cloud, norm, i),
         GradientKind::Corrected => {
             let mut a = moments::<K>(cloud, i).gc;
             if cloud.dim < 2.0 {
@@ -95,6 +96,7 @@ pub fn gradient<K: Kernel>(kind: GradientKind, cloud: &Cloud, norm: Normalisatio
                 let df = match kind {
                     GradientKind::MinimumPressure => f[j] - f_min[i],
                     GradientKind::Cmps => f[i] + f[j] - f_min[i] - f_min[j],
+                    GradientKind::Symmetric => f[i] + f[j],
                     _ => f[j] - f[i],
                 };
                 g += gij * df;
