@@ -8,9 +8,10 @@
 //!
 //! Λ the particles inside Ω. Particles fill Ω extended by r_e on every side, so each
 //! particle of Λ has a full neighbourhood, as in the paper's interior set Ω_h^in.
-//! Weight: w = r_e/r - 1 (the paper's "infinite model") with r_e = 3.1 dx; the
-//! Wendland-based HL/CHL use r_e = 3.1 dx too. Variant names are those of the case
-//! file's `scheme` block where the variant is a scheme choice.
+//! Weight: w = r_e/r - 1 (the paper's "infinite model") with r_e = 3.1 dx for every
+//! operator (paper 000 does not state h). With this weight the HL and CHL kernels are
+//! both proportional to r_e/r³, so they coincide on the regular lattice. Variant names
+//! are those of the case file's `scheme` block where the variant is a scheme choice.
 
 use crate::case::{GradientKind, LaplacianKind};
 use crate::engine::kernel::Koshizuka;
