@@ -63,6 +63,15 @@ pub enum LaplacianKind {
     LeastSquares,
 }
 
+impl LaplacianKind {
+    /// Whether the pressure matrix of this Laplacian is symmetric (so CG applies).
+    /// CHL, the anisotropic and the least-squares operators build each row from the
+    /// particle's own corrective or moment matrix: non-symmetric.
+    pub fn is_symmetric(self) -> bool {
+        !matches!(self, LaplacianKind::CorrectedHigherOrder | LaplacianKind::Anisotropic | LaplacianKind::LeastSquares)
+    }
+}
+
 /// Source term of the pressure Poisson equation.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize, JsonSchema, Default)]
 #[serde(rename_all = "snake_case")]
@@ -186,6 +195,16 @@ impl Scheme {
             compressibility: 0.45e-9,
             ..Self::default()
         }
+    }
+
+    /// The scheme as run: a non-symmetric Laplacian with a conjugate-gradient solver is
+    /// solved with BiCGSTAB instead (CG needs a symmetric matrix); the run summary
+    /// reports this resolved scheme.
+    pub fn resolved(mut self) -> Self {
+        if !self.laplacian.is_symmetric() && matches!(self.solver, SolverKind::PcgJacobi | SolverKind::PcgIc0) {
+            self.solver = SolverKind::Bicgstab;
+        }
+        self
     }
 
     /// r_e/l0 of the Laplacian actually used.
