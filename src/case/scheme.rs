@@ -137,6 +137,8 @@ pub struct Scheme {
     /// Weight of the minimum-pressure repulsion (p_i - p̂_i) Σ r w / r² added to the
     /// corrected gradient: 0 is pure GC, 1 makes it the classic gradient's stabilising part.
     pub gradient_stabilization: f64,
+    /// Pairs closer than this (ratio of l0) feel the stabilising repulsion.
+    pub stabilization_distance: f64,
     /// Clip negative pressures to zero after the solve.
     pub clip_negative_pressure: bool,
     /// Free-surface particles take the pressure of a surface half a spacing beyond them
@@ -171,7 +173,8 @@ impl Default for Scheme {
             laplacian_radius: None,
             surface_threshold: 0.97,
             surface_asymmetry: 0.2,
-            gradient_stabilization: 0.5,
+            gradient_stabilization: 1.0,
+            stabilization_distance: 0.9,
             clip_negative_pressure: true,
             surface_offset: true,
             mixed_relaxation: 0.01,

@@ -502,6 +502,7 @@ fn correct_velocity_and_position<K: Kernel>(sim: &mut Simulation, walls: &[Place
         .collect();
     let form = sim.scheme.gradient;
     let kappa = sim.scheme.gradient_stabilization;
+    let close = sim.scheme.stabilization_distance * sim.params.l0;
     let contacts = &sim.contacts;
     let neumann = &sim.scratch.neumann;
     // Anisotropic and least-squares gradients (engine::operators, paper 000 eq. 28 and
@@ -520,6 +521,7 @@ fn correct_velocity_and_position<K: Kernel>(sim: &mut Simulation, walls: &[Place
             }
             let base = contacts.offsets[i] as usize;
             let (mut s_fluid, mut s_min, mut s_sym) = (Vec2::zeros(), Vec2::zeros(), Vec2::zeros());
+            let mut s_close = Vec2::zeros();
             let mut moment = Mat2::zeros();
             for &j in nb.of(i) {
                 let j = j as usize;
@@ -532,6 +534,9 @@ fn correct_velocity_and_position<K: Kernel>(sim: &mut Simulation, walls: &[Place
                 let w = K::w(d, re) / d2;
                 s_fluid += r * ((p[j] - p[i]) * w);
                 s_min += r * ((p[j] - p_min[i]) * w);
+                if d < close {
+                    s_close += r * w;
+                }
                 s_sym += match form {
                     GradientKind::Cmps => r * ((p[i] + p[j] - p_min[i] - p_min[j]) * w),
                     _ => r * ((p[i] + p[j]) * w),
@@ -558,8 +563,9 @@ fn correct_velocity_and_position<K: Kernel>(sim: &mut Simulation, walls: &[Place
                     let det = mm.determinant();
                     let lattice_det = (1.0 / crate::engine::params::DIM).powi(2);
                     // plus the repulsive part of the minimum-pressure form, (p_i - p̂_i) Σ r w / r²,
-                    // zero on a regular neighbourhood, pushing particles apart where they cluster
-                    let stabilizer = (s_min - s_fluid + wall_m1 * (p[i] - p_min[i])) * (kappa * c_grad);
+                    // over pairs closer than `stabilization_distance`: silent on the lattice (still
+                    // water stays still), pushing particles apart where they cluster
+                    let stabilizer = s_close * ((p[i] - p_min[i]) * kappa * c_grad);
                     match mm.try_inverse() {
                         Some(c) if det > 0.3 * lattice_det => c * (s_fluid + wall_linear) / n0 + stabilizer,
                         _ => classic,
