@@ -395,6 +395,8 @@ fn check_scalars(case: &Case) -> Check {
         );
     }
     non_negative("scheme.surface_asymmetry", s.surface_asymmetry, "0 disables the neighbour-distribution check")?;
+    non_negative("scheme.gradient_stabilization", s.gradient_stabilization, "the weight of the minimum-pressure repulsion")?;
+    non_negative("scheme.stabilization_distance", s.stabilization_distance, "a ratio of particle_spacing")?;
     non_negative("scheme.mixed_relaxation", s.mixed_relaxation, "the relaxation of the PND term")?;
     non_negative("scheme.compressibility", s.compressibility, "the quasi-compressibility in 1/Pa")?;
     non_negative("scheme.collision_distance", s.collision_distance, "a ratio of particle_spacing")?;
