@@ -350,3 +350,53 @@ fn wrong_type_names_its_path() {
     let e = parse_case_value(v).expect_err("a string mass");
     assert!(e.path.starts_with("bodies[1].motion"), "{e:?}");
 }
+
+#[test]
+fn negative_stabiliser_settings() {
+    let e = rejected_json(|v| v["scheme"]["gradient_stabilization"] = json!(-0.5));
+    assert_error(&e, "scheme.gradient_stabilization", "negative");
+    let e = rejected_json(|v| v["scheme"]["stabilization_distance"] = json!(-1.0));
+    assert_error(&e, "scheme.stabilization_distance", "negative");
+}
+
+/// Every number of a JSON value, by its pointer.
+fn number_pointers(v: &Value, here: String, out: &mut Vec<String>) {
+    match v {
+        Value::Number(_) => out.push(here),
+        Value::Array(items) => items.iter().enumerate().for_each(|(i, x)| number_pointers(x, format!("{here}/{i}"), out)),
+        Value::Object(map) => map.iter().for_each(|(k, x)| number_pointers(x, format!("{here}/{k}"), out)),
+        _ => {}
+    }
+}
+
+#[test]
+fn random_bad_numbers_are_rejected_or_built_without_panics() {
+    use rand::{Rng, SeedableRng};
+    let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(20261122);
+    let mut pointers = Vec::new();
+    number_pointers(&base_value(), String::new(), &mut pointers);
+    let nasty = [0.0, -1.0, 1.0e300, -1.0e300, 1.0e-300, 0.5, 2.0, 1.0e6];
+    let limits = Limits { max_particles: 20_000 };
+    let (mut accepted, mut rejected_count) = (0, 0);
+    for _ in 0..400 {
+        let mut v = base_value();
+        for _ in 0..rng.random_range(1..4) {
+            let p = &pointers[rng.random_range(0..pointers.len())];
+            *v.pointer_mut(p).unwrap() = json!(nasty[rng.random_range(0..nasty.len())]);
+        }
+        let Ok(case) = parse_case_value(v) else { continue };
+        match validate(&case, &limits) {
+            Ok(()) => {
+                accepted += 1;
+                let params = mpsfsi::engine::params::MpsParameters::new(&case);
+                let scene = mpsfsi::engine::scene::build_scene(&case, &params);
+                assert!(scene.particles.len() <= limits.max_particles, "the estimate bounds the scene");
+            }
+            Err(e) => {
+                rejected_count += 1;
+                assert!(!e.message.is_empty(), "{e:?}");
+            }
+        }
+    }
+    assert!(accepted > 0 && rejected_count > 0, "accepted {accepted}, rejected {rejected_count}");
+}
