@@ -400,3 +400,27 @@ fn random_bad_numbers_are_rejected_or_built_without_panics() {
     }
     assert!(accepted > 0 && rejected_count > 0, "accepted {accepted}, rejected {rejected_count}");
 }
+
+#[test]
+fn design_example_case_is_valid() {
+    // the case of DESIGN.md §2.2: a prescribed wedge over a tank
+    let v = json!({
+      "name": "wedge-30deg-constant-velocity",
+      "fluid": { "density": 1000.0, "kinematic_viscosity": 1.0e-6, "gravity": [0.0, -9.81] },
+      "particle_spacing": 0.005,
+      "domain": { "min": [-1.0, -1.0], "max": [1.0, 0.6] },
+      "fluid_blocks": [ { "polygon": [[-0.8, -0.6], [0.8, -0.6], [0.8, 0.0], [-0.8, 0.0]] } ],
+      "walls": [ { "name": "tank", "polyline": [[-0.8, 0.3], [-0.8, -0.6], [0.8, -0.6], [0.8, 0.3]] } ],
+      "bodies": [ {
+          "name": "wedge",
+          "polygon": [[0.0, 0.0], [0.25, 0.1443], [0.25, 0.3], [-0.25, 0.3], [-0.25, 0.1443]],
+          "position": [0.0, 0.0],
+          "angle": 0.0,
+          "motion": { "type": "prescribed", "velocity": [0.0, -6.15], "angular_velocity": 0.0 }
+      } ],
+      "time": { "end": 0.02, "cfl": 0.2, "max_dt": 1.0e-4 },
+      "output": { "load_interval": 1.0e-5, "snapshot_interval": null, "probes": [ { "name": "p1", "position": [0.0, -0.3] } ] },
+      "scheme": { }
+    });
+    validate(&parse_case_value(v).unwrap(), &Limits::default()).expect("the DESIGN.md example is valid");
+}
