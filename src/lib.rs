@@ -4,4 +4,5 @@
 //! Data flows one way: [`case`] -> [`engine`] scene -> step pipeline -> [`output`].
 
 pub mod case;
+pub mod coupling;
 pub mod engine;
