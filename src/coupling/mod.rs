@@ -5,8 +5,10 @@
 //! it during a step ([`crate::engine::WallLoad`]). Around every fluid step:
 //!
 //! 1. [`Coupling::before_step`]: prescribed bodies get their imposed velocity for the
-//!    step (constant, or the mean of the time table over the step) in rapier
-//!    (kinematic velocity-based bodies) and in their wall state.
+//!    step (constant, or the mean of the time table over the step, so the
+//!    displacement is the exact integral of the table) in rapier (kinematic
+//!    velocity-based bodies) and in their wall state. The velocity is that of the
+//!    polygon's centroid, and the body turns about the centroid.
 //! 2. `Simulation::step(dt)` moves the fluid with the bodies at their predicted pose.
 //! 3. [`Coupling::after_step`]: for free (dynamic) bodies, reset rapier's user forces
 //!    (they persist across steps), add the fluid force and moment, gravity M g and
@@ -143,7 +145,12 @@ impl Coupling {
             let (builder, kind) = match &body.motion {
                 Motion::Prescribed { velocity, angular_velocity, table } => {
                     let prescribed = PrescribedVelocity::new(*velocity, *angular_velocity, table.as_ref());
-                    (RigidBodyBuilder::kinematic_velocity_based(), BodyKind::Prescribed(prescribed))
+                    // the imposed velocity is that of the centroid, and the body turns
+                    // about it: give rapier the centroid as the centre of mass (the mass
+                    // itself plays no role for a kinematic body)
+                    let builder = RigidBodyBuilder::kinematic_velocity_based()
+                        .additional_mass_properties(MassProperties::new(to_rapier(local_com), 1.0, 1.0));
+                    (builder, BodyKind::Prescribed(prescribed))
                 }
                 Motion::Free { mass, inertia, locked, .. } => {
                     let area = signed_area(&poly).abs();

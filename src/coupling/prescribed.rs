@@ -74,24 +74,29 @@ impl PrescribedVelocity {
     }
 
     /// Kinematics to impose over the step [t, t + dt]: the mean velocity of the step
-    /// (exact displacement for a piecewise-linear table) and the mean acceleration.
+    /// (so the displacement is exactly the integral of the table) and the mean
+    /// acceleration.
     pub fn over_step(&self, t: Real, dt: Real) -> Kinematics {
         match self {
             Self::Constant { .. } => self.at(t),
-            Self::Table(_) => {
-                let mid = self.at(t + 0.5 * dt);
+            Self::Table(s) => {
+                // the table is linear between breakpoints: trapezoids between the step
+                // ends and the breakpoints inside the step integrate it exactly
+                let mut times = vec![t];
+                times.extend(s.iter().map(|k| k.time).filter(|&k| k > t && k < t + dt));
+                times.push(t + dt);
+                let mut velocity = Vec2::zeros();
+                let mut angular_velocity = 0.0;
+                for w in times.windows(2) {
+                    let (a, b) = (self.at(w[0]), self.at(w[1]));
+                    let h = w[1] - w[0];
+                    velocity += (a.velocity + b.velocity) * (0.5 * h);
+                    angular_velocity += 0.5 * h * (a.angular_velocity + b.angular_velocity);
+                }
                 let (a, b) = (self.at(t), self.at(t + dt));
-                // mean velocity over the step: Simpson is exact for piecewise-linear
-                // velocity within one segment; across a kink it is the trapezoid of halves
-                let (m1, m2) = (self.at(t + 0.25 * dt), self.at(t + 0.75 * dt));
-                let velocity = (a.velocity + m1.velocity * 2.0 + mid.velocity * 2.0 + m2.velocity * 2.0 + b.velocity) / 8.0;
-                let angular_velocity = (a.angular_velocity
-                    + 2.0 * (m1.angular_velocity + mid.angular_velocity + m2.angular_velocity)
-                    + b.angular_velocity)
-                    / 8.0;
                 Kinematics {
-                    velocity,
-                    angular_velocity,
+                    velocity: velocity / dt,
+                    angular_velocity: angular_velocity / dt,
                     acceleration: (b.velocity - a.velocity) / dt,
                     angular_acceleration: (b.angular_velocity - a.angular_velocity) / dt,
                 }
