@@ -6,4 +6,5 @@ mod apex;
 mod common;
 mod coupling;
 mod hydrostatics;
+mod probe;
 mod wedge;
