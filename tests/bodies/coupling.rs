@@ -97,10 +97,62 @@ fn oscillation(v: &[f64]) -> f64 {
     (total - net) / net
 }
 
+/// The added-mass instability on its model problem (Causin, Gerbeau & Nobile 2005):
+/// an incompressible fluid whose force on the body is F = F_ext - m_a a^n, the
+/// reaction to the body acceleration of the step before. Driven through the real
+/// coupling (rapier mass properties, force reset) with the fluid replaced by that law:
+/// exact answer a = F_ext / (M + m_a). Plain explicit coupling has the amplification
+/// -m_a / M and diverges; Söding's stabilisation with an estimate m~ has the
+/// amplification (m~ - m_a) / (M + m~): stable when m~ > (m_a - M) / 2, exact in one
+/// step when m~ = m_a.
+#[test]
+fn added_mass_stabilisation_on_the_model_problem() {
+    let (m_body, m_a, f_ext, dt) = (40.0, 200.0, 1000.0, 1.0e-3);
+    let exact = f_ext / (m_body + m_a);
+    let case = shipped("floating_box.json", &["fluid.gravity=[0.0, 0.0]".into(), "particle_spacing=0.05".into()]);
+    let run_model = |added_mass: AddedMass, steps: usize| -> Vec<f64> {
+        let mut sim = Simulation::new(&case);
+        let mut coupling = Coupling::with_options(&case, &sim, CouplingOptions { added_mass }).unwrap();
+        let k = sim.walls.iter().position(|w| w.body.is_some()).unwrap();
+        let (mut v_prev, mut a_prev) = (0.0, 0.0);
+        let mut acc = Vec::new();
+        for _ in 0..steps {
+            sim.loads[k].force.y = f_ext - m_a * a_prev;
+            coupling.after_step(&mut sim, dt);
+            let v = coupling.samples(&sim)[0].vy;
+            a_prev = (v - v_prev) / dt;
+            v_prev = v;
+            acc.push(a_prev);
+        }
+        acc
+    };
+    let report = |name: &str, a: &[f64]| println!("model problem, {name}: a = {:?} ... {:.4e} (exact {exact:.4})", &a[..4], a[a.len() - 1]);
+    let plain = run_model(AddedMass::Off, 20);
+    report("plain", &plain);
+    // (rapier caps speeds at 400 m/s, which bounds the blow-up)
+    assert!(plain[19].abs() > 1e4 * exact, "plain explicit coupling with m_a / M = 5 must diverge");
+    let exact_estimate = run_model(AddedMass::Constant { mass: m_a, inertia: 0.0 }, 20);
+    report("m~ = m_a", &exact_estimate);
+    assert!(exact_estimate.iter().all(|a| (a - exact).abs() < 1e-9 * exact), "m~ = m_a must give the exact acceleration at once");
+    for (estimate, stable) in [(2.0 * m_a, true), (0.6 * m_a, true), (0.3 * m_a, false)] {
+        // amplification (m~ - m_a) / (M + m~)
+        let factor: f64 = (estimate - m_a) / (m_body + estimate);
+        let a = run_model(AddedMass::Constant { mass: estimate, inertia: 0.0 }, 200);
+        report(&format!("m~ = {estimate}"), &a);
+        let err = (a[199] - exact).abs() / exact;
+        if stable {
+            assert!(err < 2.0 * factor.abs().powi(199) + 1e-9, "m~ = {estimate}: error {err:.3e}");
+        } else {
+            assert!(err > 1e3, "m~ = {estimate} is below (m_a - M) / 2 and must diverge (error {err:.3e})");
+        }
+    }
+}
+
 /// A wedge of 20 kg/m, lighter than its Wagner added mass rho pi c²/2 (24.5 kg/m at
-/// c = 0.125 m, mid-entry; 98 kg/m at the chine): with plain explicit coupling the
-/// amplification -m_a / M exceeds one and the velocity oscillates and grows; with the
-/// added-mass stabilisation it enters smoothly.
+/// c = 0.125 m, mid-entry; 98 kg/m at the chine) enters smoothly with the added-mass
+/// stabilisation. (The plain explicit run is printed for comparison: with the present
+/// engine, whose wall force answers the approach velocity and clips suction, it stays
+/// stable too; the model problem above shows the instability itself.)
 #[test]
 fn light_wedge_enters_without_added_mass_instability() {
     let mut overrides = vec!["particle_spacing=0.01".to_string(), "bodies.0.motion.mass=20.0".into()];
@@ -125,6 +177,4 @@ fn light_wedge_enters_without_added_mass_instability() {
     assert!(stable.error.is_none(), "{:?}", stable.error);
     assert!(os < 0.1, "stabilised light wedge oscillates: {os:.3}");
     assert!(vs.last().unwrap().abs() < 0.8 * 6.15, "the light wedge should lose much of its speed");
-    // the test can fail: plain explicit coupling of the same body is unstable
-    assert!(plain.error.is_some() || op > 1.0 || !vp.last().unwrap().is_finite(), "plain coupling unexpectedly stable ({op:.3})");
 }
