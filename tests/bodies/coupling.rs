@@ -178,3 +178,26 @@ fn light_wedge_enters_without_added_mass_instability() {
     assert!(os < 0.1, "stabilised light wedge oscillates: {os:.3}");
     assert!(vs.last().unwrap().abs() < 0.8 * 6.15, "the light wedge should lose much of its speed");
 }
+
+/// Contact goes through rapier: a free box dropped in air onto a fixed wall (a shelf
+/// polyline at y = 0.1 m, away from the water) comes to rest on it instead of
+/// falling through.
+#[test]
+fn free_body_lands_on_a_fixed_wall() {
+    let case = shipped(
+        "floating_box.json",
+        &[
+            r#"fluid_blocks=[{"polygon": [[-1.0, -0.5], [-0.9, -0.5], [-0.9, -0.4], [-1.0, -0.4]]}]"#.into(),
+            r#"walls=[{"name": "tank", "polyline": [[-1.0, 0.4], [-1.0, -0.5], [1.0, -0.5], [1.0, 0.4]]}, {"name": "shelf", "polyline": [[-0.5, 0.1], [0.5, 0.1]]}]"#.into(),
+            "bodies.0.position=[0.0, 0.2]".into(),
+        ],
+    );
+    let trace = run(&case, CouplingOptions::default(), Some(0.5), |_| {});
+    assert!(trace.error.is_none(), "{:?}", trace.error);
+    let lowest = trace.steps.iter().map(|s| s.bodies[0].y - 0.1).fold(f64::INFINITY, f64::min);
+    let last = &trace.steps.last().unwrap().bodies[0];
+    println!("box on shelf: bottom at {:.5} m (lowest {:.5} m), v_y {:.2e} m/s", last.y - 0.1, lowest, last.vy);
+    // free fall from 0.1 m above would take 0.14 s; by 0.5 s it rests on the shelf
+    assert!(lowest > 0.1 - 0.005, "the box went through the shelf: bottom at {lowest:.4} m");
+    assert!((last.y - 0.1 - 0.1).abs() < 0.005 && last.vy.abs() < 0.05, "box not at rest on the shelf: {last:?}");
+}
