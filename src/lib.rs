@@ -6,3 +6,5 @@
 pub mod case;
 pub mod coupling;
 pub mod engine;
+pub mod output;
+pub mod run;

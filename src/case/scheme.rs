@@ -24,10 +24,19 @@ pub enum KernelKind {
 pub enum GradientKind {
     /// Classic MPS with the minimum neighbour pressure (Koshizuka & Oka 1996).
     MinimumPressure,
-    /// Antisymmetric CMPS (Khayyer & Gotoh 2008): momentum-conserving.
-    #[default]
+    /// Antisymmetric pair form (p_i + p_j) r_ij w / r² (SPH-like, reference pressure 0 =
+    /// the free-surface value): conserves momentum and is exact for linear fields on the
+    /// lattice, but repulsive pair forces make the square lattice unstable under shear
+    /// (measured: a still tank rearranges with speeds near sqrt(p/rho)).
+    Symmetric,
+    /// CMPS (Khayyer & Gotoh 2008, paper 003 eq. 19): (p_i + p_j) - (p̂_i + p̂_j).
+    /// Conserves momentum but differentiates p - p̂, which is constant in a hydrostatic
+    /// column: measured, a still tank falls through its own pressure with it.
     Cmps,
-    /// Corrective matrix (GC, paper 004 eqs. 12-13) with the minimum pressure.
+    /// Corrective matrix (GC, paper 004 eqs. 12-13): exact for linear fields in any
+    /// arrangement, so still water stays still; falls back to the minimum-pressure form
+    /// where the matrix is ill-conditioned (splash).
+    #[default]
     Corrected,
     /// Anisotropic first-order operator (paper 000 eq. 28).
     Anisotropic,
@@ -118,6 +127,9 @@ pub struct Scheme {
     pub surface_asymmetry: f64,
     /// Clip negative pressures to zero after the solve.
     pub clip_negative_pressure: bool,
+    /// Free-surface particles take the pressure of a surface half a spacing beyond them
+    /// (the previous gradient times l0/2) instead of 0: removes an O(l0/H) bias.
+    pub surface_offset: bool,
     /// Relaxation gamma of the PND term in the mixed source.
     pub mixed_relaxation: f64,
     /// Quasi-compressibility alpha_c (1/Pa) added to the PPE diagonal as -rho alpha_c / dt^2.
@@ -148,6 +160,7 @@ impl Default for Scheme {
             surface_threshold: 0.97,
             surface_asymmetry: 0.2,
             clip_negative_pressure: true,
+            surface_offset: true,
             mixed_relaxation: 0.01,
             compressibility: 0.0,
             spacing_control: SpacingControl::default(),

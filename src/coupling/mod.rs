@@ -37,17 +37,8 @@ use rapier2d_f64::prelude::{
     ColliderBuilder, LockedAxes, MassProperties, PhysicsWorld, RigidBodyBuilder, RigidBodyHandle, Vector,
 };
 
-/// One row of bodies.csv: the centre of mass, the angle and the velocities.
-#[derive(Debug, Clone, PartialEq)]
-pub struct BodySample {
-    pub name: String,
-    pub x: Real,
-    pub y: Real,
-    pub angle: Real,
-    pub vx: Real,
-    pub vy: Real,
-    pub omega: Real,
-}
+/// One row of bodies.csv (centre of mass, angle, velocities): defined with the writers.
+pub use crate::output::BodySample;
 
 /// Coupling choices that are not part of the case format.
 #[derive(Debug, Clone, Copy, PartialEq, Default)]

@@ -38,6 +38,17 @@ where
     use rayon::prelude::*;
     const CHUNK: usize = 2048;
     let chunks = n.div_ceil(CHUNK);
+    if chunks <= 8 {
+        let mut total = 0.0;
+        for c in 0..chunks {
+            let mut s = 0.0;
+            for i in c * CHUNK..((c + 1) * CHUNK).min(n) {
+                s += f(i);
+            }
+            total += s;
+        }
+        return total;
+    }
     let partial: Vec<Real> = (0..chunks)
         .into_par_iter()
         .map(|c| {

@@ -38,7 +38,7 @@ pub struct WallLoad {
 }
 
 /// Wall-clock seconds spent in each stage (accumulated over the run).
-#[derive(Debug, Clone, Copy, Default, PartialEq, serde::Serialize)]
+#[derive(Debug, Clone, Copy, Default, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct StageTimes {
     pub explicit_forces: f64,
     pub neighbors: f64,

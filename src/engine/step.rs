@@ -1,25 +1,25 @@
 //! One projection step of semi-implicit MPS, as a list of named stages.
 //!
-//! Default scheme (MPS-HS-HL-ECS with the CMPS gradient, papers 003 and 004):
+//! Default scheme (MPS-HS-HL-ECS with an antisymmetric gradient, papers 003 and 004):
 //! explicit viscosity and gravity give u*, x*; the pressure Poisson equation with the
 //! higher-order source plus error-compensating terms is solved on x* with the
-//! (lattice-normalised) higher-order Laplacian; the antisymmetric gradient corrects
+//! (lattice-normalised) higher-order Laplacian; the antisymmetric pair gradient corrects
 //! velocity and position. Walls enter through the virtual-lattice sums of `walls`.
 //!
 //! Walls and the pressure equation (our formulation): virtual wall points take the
-//! particle's pressure extrapolated with the Neumann condition,
-//! p_k = p_i + c_i · (x_k - x_i), with
-//! c_i = (rho/dt) min(0, (u*_i - u_w)·n) n + rho ((g - a_w) - ((g - a_w)·n) n):
-//! the normal part is the kinematic condition (it stops the particle's approach to the
-//! wall in one step, which for fluid at rest is rho g·n, the hydrostatic gradient), the
-//! tangential part carries gravity and the wall acceleration along the wall. The wall
-//! therefore adds no unknowns and no matrix entries, only right-hand-side terms, and
-//! the same extrapolation gives the wall part of the gradient, whose reaction is the
-//! load on the wall. With the PND source (classic scheme) virtual points take p_i
-//! (Harada et al. 2008) and the wall acts through the number density alone.
+//! particle's pressure extrapolated with the Neumann condition of an accelerating wall,
+//! p_k = p_i + rho (g - a_w) · (x_k - x_i) (notes §2.2), so the wall adds no unknowns
+//! and no matrix entries, only right-hand-side terms; the same extrapolation gives the
+//! wall part of the gradient, whose reaction is the load on the wall. The kinematic
+//! condition enters the source: virtual points move with the wall, so the HS source
+//! gains ∇Z · (u_i^n - u_w), the rate at which the wall lattice's share of n changes
+//! with the relative velocity at the start of the step (the body-force part of u* is
+//! already carried by the Neumann term; counting it twice over-corrects). With the PND
+//! source (classic scheme) virtual points take p_i (Harada et al. 2008) and the wall
+//! acts through the number density alone.
 
 use super::kernel::Kernel;
-use super::math::{vec2, Real, Vec2};
+use super::math::{vec2, Mat2, Real, Vec2};
 use super::neighbors::NeighborList;
 use super::pressure::{self, CsrMatrix, SolveParams};
 use super::simulation::{SimError, Simulation, StepInfo, WallLoad};
@@ -34,6 +34,8 @@ use std::time::Instant;
 #[derive(Debug, Default)]
 pub(crate) struct Scratch {
     x_star: Vec<Vec2>,
+    /// u^n, before the explicit forces.
+    u_start: Vec<Vec2>,
     n_star: Vec<Real>,
     div_star: Vec<Real>,
     unknown_of: Vec<u32>,
@@ -42,6 +44,8 @@ pub(crate) struct Scratch {
     solution: Vec<Real>,
     neumann: Vec<Vec2>,
     gradient: Vec<Vec2>,
+    /// Dirichlet value of each free-surface particle (0 elsewhere).
+    surface_pressure: Vec<Real>,
     matrix: CsrMatrix,
 }
 
@@ -142,7 +146,7 @@ fn step<K: Kernel>(sim: &mut Simulation, dt: Real) -> Result<StepInfo, SimError>
     sim.stage_times.number_density += seconds(&mut clock);
 
     // PPE: source (HS + ECS, paper 004 eqs. 3, 10-11), Laplacian (HL, eq. 9), Neumann walls
-    compute_neumann_gradients(sim, dt);
+    compute_neumann_gradients(sim);
     assemble_pressure_equation::<K>(sim, &weights, dt);
     sim.stage_times.assemble += seconds(&mut clock);
     let (iterations, residual) = solve_pressure(sim)?;
@@ -178,6 +182,7 @@ fn step<K: Kernel>(sim: &mut Simulation, dt: Real) -> Result<StepInfo, SimError>
 fn apply_explicit_forces<K: Kernel>(sim: &mut Simulation, weights: &KernelWeights<K>, dt: Real) {
     let g = vec2(sim.params.gravity);
     let nu = sim.params.viscosity;
+    sim.scratch.u_start.clone_from(&sim.particles.velocity);
     if nu <= 0.0 {
         sim.particles.velocity.par_iter_mut().for_each(|u| *u += g * dt);
         return;
@@ -278,15 +283,17 @@ fn detect_free_surface<K: Kernel>(sim: &mut Simulation) {
     let beta = sim.scheme.surface_threshold;
     let asym_limit = sim.scheme.surface_asymmetry;
     let n_star = &sim.scratch.n_star;
-    sim.particles.free_surface = (0..x.len())
+    let grad_prev = &sim.scratch.gradient;
+    let offset = sim.scheme.surface_offset;
+    // (is surface, Dirichlet value): the surface lies half a spacing beyond the particle,
+    // so its pressure is the previous step's gradient times l0/2 along the outward normal
+    // (rho g l0 / 2 at rest).
+    let flags: Vec<(bool, Real)> = (0..x.len())
         .into_par_iter()
         .map(|i| {
             let n = n_star[i];
             if n >= beta * n0 {
-                return false;
-            }
-            if asym_limit <= 0.0 || n < 0.8 * n0 {
-                return true;
+                return (false, 0.0);
             }
             let mut m = Vec2::zeros();
             for &j in nb.of(i) {
@@ -300,39 +307,43 @@ fn detect_free_surface<K: Kernel>(sim: &mut Simulation) {
             for c in contacts.of(i) {
                 m += c.terms.moment1;
             }
-            m.norm() * l0 / n.max(1e-12) > asym_limit
+            let one_sided = m.norm() * l0 / n.max(1e-12) > asym_limit;
+            let surface = asym_limit <= 0.0 || n < 0.8 * n0 || one_sided;
+            if !surface {
+                return (false, 0.0);
+            }
+            let value = match (offset, grad_prev.get(i)) {
+                (true, Some(g)) if m.norm() > 0.0 => (g.dot(&(m / m.norm())) * 0.5 * l0).max(0.0),
+                _ => 0.0,
+            };
+            (true, value)
         })
+        .collect();
+    sim.particles.free_surface = flags.iter().map(|f| f.0).collect();
+    sim.scratch.surface_pressure = flags.iter().map(|f| f.1).collect();
+}
+
+/// The extrapolation gradient c = rho (g - a_w) of every wall contact (module docs);
+/// zero for the PND source (virtual points take p_i).
+fn compute_neumann_gradients(sim: &mut Simulation) {
+    let rho = sim.params.density;
+    let g = vec2(sim.params.gravity);
+    let extrapolate = sim.scheme.source != SourceKind::Pnd;
+    sim.scratch.neumann = sim
+        .contacts
+        .contacts
+        .par_iter()
+        .map(|c| if extrapolate { (g - c.wall_acceleration) * rho } else { Vec2::zeros() })
         .collect();
 }
 
-/// The extrapolation vector c of every wall contact (see the module docs).
-fn compute_neumann_gradients(sim: &mut Simulation, dt: Real) {
-    let rho = sim.params.density;
-    let g = vec2(sim.params.gravity);
-    let kinematic = sim.scheme.source != SourceKind::Pnd;
-    let u = &sim.particles.velocity;
-    let offsets = &sim.contacts.offsets;
-    let contacts = &sim.contacts.contacts;
-    let mut owner = vec![0u32; contacts.len()];
-    for i in 0..offsets.len().saturating_sub(1) {
-        for k in offsets[i]..offsets[i + 1] {
-            owner[k as usize] = i as u32;
+/// Wall share of the HS divergence: -c ∇Z · (u_i - u_w) (virtual points move with the wall).
+fn add_wall_divergence(div: &mut [Real], u: &[Vec2], contacts: &WallContacts, c: Real) {
+    div.par_iter_mut().enumerate().for_each(|(i, d)| {
+        for ct in contacts.of(i) {
+            *d -= c * ct.terms.number_density_gradient.dot(&(u[i] - ct.wall_velocity));
         }
-    }
-    sim.scratch.neumann = contacts
-        .par_iter()
-        .zip(owner.par_iter())
-        .map(|(c, &i)| {
-            if !kinematic {
-                return Vec2::zeros();
-            }
-            let n = c.normal;
-            let approach = (u[i as usize] - c.wall_velocity).dot(&n).min(0.0);
-            let body = g - c.wall_acceleration;
-            let tangential = body - n * body.dot(&n);
-            n * (rho / dt * approach) + tangential * rho
-        })
-        .collect();
+    });
 }
 
 fn assemble_pressure_equation<K: Kernel>(sim: &mut Simulation, weights: &KernelWeights<K>, dt: Real) {
@@ -346,8 +357,10 @@ fn assemble_pressure_equation<K: Kernel>(sim: &mut Simulation, weights: &KernelW
     for i in 0..np {
         if !surface[i] && nb.of(i).iter().all(|&j| weights.laplacian((x[j as usize] - x[i]).norm()) == 0.0) {
             surface[i] = true;
+            sim.scratch.surface_pressure[i] = 0.0;
         }
     }
+    let dirichlet = &sim.scratch.surface_pressure;
     let surface = &sim.particles.free_surface;
     let mut unknown_of = vec![u32::MAX; np];
     let mut particle_of = Vec::with_capacity(np);
@@ -358,7 +371,8 @@ fn assemble_pressure_equation<K: Kernel>(sim: &mut Simulation, weights: &KernelW
         }
     }
     // source term S of ∇²p - (rho alpha / dt²) p = S
-    let div_star = divergence::<K>(x, &sim.particles.velocity, nb, p.re, p.divergence_coefficient);
+    let mut div_star = divergence::<K>(x, &sim.particles.velocity, nb, p.re, p.divergence_coefficient);
+    add_wall_divergence(&mut div_star, &sim.scratch.u_start, &sim.contacts, p.divergence_coefficient);
     let n_prev = &sim.particles.number_density;
     let div_prev = &sim.particles.number_density_rate;
     let n_star = &sim.scratch.n_star;
@@ -388,6 +402,7 @@ fn assemble_pressure_equation<K: Kernel>(sim: &mut Simulation, weights: &KernelW
             let mut cols = Vec::with_capacity(32);
             let mut vals = Vec::with_capacity(32);
             let mut diag = compress;
+            let mut b = -source_of(i);
             for &j in nb.of(i) {
                 let l = c_lap * weights.laplacian((x[j as usize] - x[i]).norm());
                 if l == 0.0 {
@@ -398,11 +413,12 @@ fn assemble_pressure_equation<K: Kernel>(sim: &mut Simulation, weights: &KernelW
                 if uj != u32::MAX {
                     cols.push(uj);
                     vals.push(-l);
+                } else {
+                    b += l * dirichlet[j as usize];
                 }
             }
             cols.push(row as u32);
             vals.push(diag);
-            let mut b = -source_of(i);
             let base = contacts.offsets[i] as usize;
             for (k, c) in contacts.of(i).iter().enumerate() {
                 b += c_lap * neumann[base + k].dot(&c.terms.laplacian_moment);
@@ -435,7 +451,7 @@ fn solve_pressure(sim: &mut Simulation) -> Result<(usize, Real), SimError> {
         .map_err(|e| SimError::Solver { step: sim.steps + 1, time: sim.time, reason: e.to_string() })?;
     let clip = sim.scheme.clip_negative_pressure;
     let p = &mut sim.particles.pressure;
-    p.iter_mut().for_each(|v| *v = 0.0);
+    p.copy_from_slice(&s.surface_pressure);
     for (row, &i) in s.particle_of.iter().enumerate() {
         let v = s.solution[row];
         p[i as usize] = if clip { v.max(0.0) } else { v };
@@ -445,27 +461,29 @@ fn solve_pressure(sim: &mut Simulation) -> Result<(usize, Real), SimError> {
 
 fn correct_velocity_and_position<K: Kernel>(sim: &mut Simulation, walls: &[PlacedWall], dt: Real, loads: &mut [WallLoad]) {
     let prm = &sim.params;
-    let (re, rho, c_grad, m) = (prm.re, prm.density, prm.gradient_coefficient, prm.particle_mass);
+    let (re, rho, c_grad, m, n0) = (prm.re, prm.density, prm.gradient_coefficient, prm.particle_mass, prm.n0);
     let x = &sim.scratch.x_star;
     let p = &sim.particles.pressure;
     let nb = &sim.neighbors;
     let n = x.len();
-    // minimum pressure over each neighbourhood (stability of the gradient)
+    // minimum pressure over each neighbourhood (stability of the classic gradient)
     let p_min: Vec<Real> = (0..n)
         .into_par_iter()
         .map(|i| {
             nb.of(i).iter().filter(|&&j| (x[j as usize] - x[i]).norm() < re).map(|&j| p[j as usize]).fold(p[i], Real::min)
         })
         .collect();
-    let antisymmetric = sim.scheme.gradient == GradientKind::Cmps;
-    let k_form = if antisymmetric { 2.0 } else { 1.0 };
+    let form = sim.scheme.gradient;
     let contacts = &sim.contacts;
     let neumann = &sim.scratch.neumann;
-    // fluid part of the gradient, then the wall part per contact
-    let grads: Vec<Vec2> = (0..n)
+    // The gradient that moves the particles (fluid neighbours + virtual wall points).
+    let total: Vec<Vec2> = (0..n)
         .into_par_iter()
         .map(|i| {
-            let mut g = Vec2::zeros();
+            let wall_contacts = contacts.of(i);
+            let base = contacts.offsets[i] as usize;
+            let (mut s_fluid, mut s_min, mut s_sym) = (Vec2::zeros(), Vec2::zeros(), Vec2::zeros());
+            let mut moment = Mat2::zeros();
             for &j in nb.of(i) {
                 let j = j as usize;
                 let r = x[j] - x[i];
@@ -474,28 +492,49 @@ fn correct_velocity_and_position<K: Kernel>(sim: &mut Simulation, walls: &[Place
                 if d >= re || d == 0.0 {
                     continue;
                 }
-                let dp = if antisymmetric { p[i] + p[j] - p_min[i] - p_min[j] } else { p[j] - p_min[i] };
-                g += r * (dp * K::w(d, re) / d2);
+                let w = K::w(d, re) / d2;
+                s_fluid += r * ((p[j] - p[i]) * w);
+                s_min += r * ((p[j] - p_min[i]) * w);
+                s_sym += match form {
+                    GradientKind::Cmps => r * ((p[i] + p[j] - p_min[i] - p_min[j]) * w),
+                    _ => r * ((p[i] + p[j]) * w),
+                };
+                moment += r * r.transpose() * w;
             }
-            g * c_grad
+            // virtual points: p_k - p_i = c · r_ik
+            let mut wall_linear = Vec2::zeros();
+            let mut wall_m1 = Vec2::zeros();
+            for (k, c) in wall_contacts.iter().enumerate() {
+                wall_linear += c.terms.moment2_times(neumann[base + k]);
+                wall_m1 += c.terms.moment1;
+                let [xx, xy, yy] = c.terms.moment2;
+                moment += Mat2::new(xx, xy, xy, yy);
+            }
+            let classic = (s_min + wall_m1 * (p[i] - p_min[i]) + wall_linear) * c_grad;
+            match form {
+                GradientKind::MinimumPressure => classic,
+                GradientKind::Symmetric => (s_sym + wall_m1 * (2.0 * p[i]) + wall_linear) * c_grad,
+                GradientKind::Cmps => (s_sym + wall_m1 * (2.0 * (p[i] - p_min[i])) + wall_linear) * c_grad,
+                _ => {
+                    // GC: C = [(1/n0) Σ w r rᵀ / r²]⁻¹; on the full lattice C = d I.
+                    let mm = moment / n0;
+                    let det = mm.determinant();
+                    let lattice_det = (1.0 / crate::engine::params::DIM).powi(2);
+                    match mm.try_inverse() {
+                        Some(c) if det > 0.3 * lattice_det => c * (s_fluid + wall_linear) / n0,
+                        _ => classic,
+                    }
+                }
+            }
         })
         .collect();
-    let wall_grads: Vec<Vec2> = contacts
-        .contacts
-        .par_iter()
-        .enumerate()
-        .map(|(k, c)| {
-            let _ = k;
-            Vec2::zeros() + c.terms.moment2_times(neumann[k]) * c_grad
-        })
-        .collect();
-    let mut total = grads;
+    // Loads: the conservative (antisymmetric) wall term, virtual pressure p_k = p_i + c·r:
+    // Σ_k (p_i + p_k) r w / r² — a pressure integral over the wall through the MPS wall
+    // operator, whose sum over a still tank is the fluid's weight.
     for i in 0..n {
         let base = contacts.offsets[i] as usize;
         for (k, c) in contacts.of(i).iter().enumerate() {
-            let gw = c.terms.moment1 * (k_form * (p[i] - p_min[i]) * c_grad) + wall_grads[base + k];
-            total[i] += gw;
-            // reaction on the wall: F = -m a_wall = m/rho ∇p_wall
+            let gw = (c.terms.moment1 * (2.0 * p[i]) + c.terms.moment2_times(neumann[base + k])) * c_grad;
             let f = gw * (m / rho);
             let load = &mut loads[c.object as usize];
             load.pressure_force += f;
@@ -589,12 +628,13 @@ fn update_number_density_and_divergence<K: Kernel>(sim: &mut Simulation) {
                 s += K::w((x[j as usize] - x[i]).norm(), re);
             }
             for c in contacts.of(i) {
-                s += c.terms.number_density + c.terms.number_density_gradient.dot(&(x[i] - xs[i]));
+                s += (c.terms.number_density + c.terms.number_density_gradient.dot(&(x[i] - xs[i]))).max(0.0);
             }
             s
         })
         .collect();
-    let div = divergence::<K>(x, &sim.particles.velocity, nb, re, sim.params.divergence_coefficient);
+    let mut div = divergence::<K>(x, &sim.particles.velocity, nb, re, sim.params.divergence_coefficient);
+    add_wall_divergence(&mut div, &sim.particles.velocity, contacts, sim.params.divergence_coefficient);
     sim.particles.number_density = n;
     sim.particles.number_density_rate = div;
 }

@@ -17,6 +17,17 @@ pub struct CsrMatrix {
 impl CsrMatrix {
     /// y = A x (each row summed in column order: deterministic).
     pub fn mul(&self, x: &[Real], y: &mut [Real]) {
+        let row = |i: usize| {
+            let mut s = 0.0;
+            for k in self.row_ptr[i]..self.row_ptr[i + 1] {
+                s += self.val[k] * x[self.col[k] as usize];
+            }
+            s
+        };
+        if self.n < super::pcg::PARALLEL_MIN / 4 {
+            y.iter_mut().enumerate().for_each(|(i, yi)| *yi = row(i));
+            return;
+        }
         y.par_iter_mut().with_min_len(512).enumerate().for_each(|(i, yi)| {
             let mut s = 0.0;
             for k in self.row_ptr[i]..self.row_ptr[i + 1] {

@@ -1,0 +1,33 @@
+//! Pressure probes: the MPS weighted average of particle pressures around a point,
+//! p = Σ w(|x_j - x|) p_j / Σ w (kernel of the scheme at r_e).
+
+use crate::engine::kernel::weight;
+use crate::engine::math::{Real, Vec2};
+use crate::engine::Simulation;
+
+#[derive(Debug, Clone)]
+pub struct ProbePoint {
+    pub name: String,
+    pub position: Vec2,
+}
+
+/// Pressure at every probe (0 where no particle is within r_e: a dry probe).
+pub fn sample(sim: &Simulation, probes: &[ProbePoint]) -> Vec<(String, Real)> {
+    let re = sim.params.re;
+    let kind = sim.scheme.kernel;
+    probes
+        .iter()
+        .map(|probe| {
+            let (mut sw, mut swp) = (0.0, 0.0);
+            for (x, p) in sim.particles.position.iter().zip(&sim.particles.pressure) {
+                let r = (x - probe.position).norm();
+                if r < re {
+                    let w = weight(kind, r.max(0.05 * sim.params.l0), re);
+                    sw += w;
+                    swp += w * p;
+                }
+            }
+            (probe.name.clone(), if sw > 0.0 { swp / sw } else { 0.0 })
+        })
+        .collect()
+}

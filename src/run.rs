@@ -1,0 +1,189 @@
+//! `run_case`: a validated case -> the run directory. Progress and cancellation go
+//! through an [`Observer`], so the CLI (progress bar) and the service (job record,
+//! DELETE) drive the same loop. A failed run keeps everything it wrote and says why.
+
+use crate::case::{self, Case, CaseError, Limits, Scheme};
+use crate::coupling::Coupling;
+use crate::engine::math::{vec2, Real};
+use crate::engine::{SimError, Simulation, StageTimes};
+use crate::output::{probes::ProbePoint, RunWriter};
+use serde::{Deserialize, Serialize};
+use std::path::Path;
+use std::time::Instant;
+
+/// Where a run is, reported after every step.
+#[derive(Debug, Clone, Copy, Default, Serialize)]
+pub struct Progress {
+    pub step: u64,
+    pub simulated_time: Real,
+    pub end_time: Real,
+    pub dt: Real,
+    pub particles: usize,
+    pub solver_iterations: usize,
+}
+
+impl Progress {
+    pub fn fraction(&self) -> Real {
+        if self.end_time > 0.0 { (self.simulated_time / self.end_time).clamp(0.0, 1.0) } else { 1.0 }
+    }
+}
+
+/// Receives progress; can ask the run to stop (checked once per step).
+pub trait Observer {
+    /// Called once the scene is built, before the first step.
+    fn started(&mut self, _particles: usize, _estimated_steps: u64) {}
+    fn progress(&mut self, _progress: &Progress) {}
+    fn is_cancelled(&self) -> bool {
+        false
+    }
+}
+
+/// An observer that ignores everything.
+pub struct Quiet;
+impl Observer for Quiet {}
+
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum RunStatus {
+    Succeeded,
+    Failed,
+    Cancelled,
+}
+
+/// summary.json
+#[derive(Debug, Clone, Serialize, Deserialize)]
+pub struct Summary {
+    pub status: RunStatus,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub reason: Option<String>,
+    pub case: String,
+    pub steps: u64,
+    pub simulated_time: Real,
+    pub end_time: Real,
+    pub wall_time_s: f64,
+    pub particles: usize,
+    pub particles_removed: usize,
+    pub max_velocity: Real,
+    pub min_dt: Real,
+    pub max_dt: Real,
+    pub mean_solver_iterations: Real,
+    pub stage_seconds: StageTimes,
+    pub n0: Real,
+    pub scheme: Scheme,
+    pub version: String,
+}
+
+#[derive(Debug, thiserror::Error)]
+pub enum RunError {
+    #[error("invalid case: {0}")]
+    Case(#[from] CaseError),
+    #[error("cannot write the run directory: {0}")]
+    Io(#[from] std::io::Error),
+}
+
+/// Estimated number of steps (for `check` and progress): end / dt at the larger of the
+/// initial speeds and the free-fall speed over the domain height.
+pub fn estimate_steps(case: &Case) -> u64 {
+    let g = vec2(case.fluid.gravity).norm();
+    let h = case.domain.max[1] - case.domain.min[1];
+    let mut u = (2.0 * g * h.max(0.0)).sqrt() * 0.5;
+    for b in &case.bodies {
+        let (case::Motion::Prescribed { velocity, .. } | case::Motion::Free { velocity, .. }) = &b.motion;
+        u = u.max(vec2(*velocity).norm());
+    }
+    let mut dt = case.time.max_dt;
+    if u > 0.0 {
+        dt = dt.min(case.time.cfl * case.particle_spacing / u);
+    }
+    (case.time.end / dt).ceil() as u64
+}
+
+/// Validate, build, step to the end time (or failure / cancellation), write the run directory.
+pub fn run_case(case: &Case, out_dir: &Path, observer: &mut dyn Observer) -> Result<Summary, RunError> {
+    case::validate(case, &Limits::default())?;
+    let started = Instant::now();
+    let mut sim = Simulation::new(case);
+    let mut coupling = Coupling::new(case, &sim);
+    let probes: Vec<ProbePoint> =
+        case.output.probes.iter().map(|p| ProbePoint { name: p.name.clone(), position: vec2(p.position) }).collect();
+    let mut writer = RunWriter::create(out_dir, case.output.load_interval, sim.wall_names(), coupling.is_some(), probes)?;
+    let mut snapshots = crate::output::snapshots::SnapshotWriter::create(out_dir, case.output.snapshot_interval)?;
+    if let Some(s) = &mut snapshots {
+        s.record(&sim)?;
+    }
+    observer.started(sim.particle_count(), estimate_steps(case));
+    let (mut min_dt, mut max_dt, mut max_velocity) = (Real::INFINITY, 0.0 as Real, 0.0 as Real);
+    let end = case.time.end;
+    let mut failure: Option<(RunStatus, String)> = None;
+    while sim.time < end * (1.0 - 1e-12) {
+        if observer.is_cancelled() {
+            failure = Some((RunStatus::Cancelled, SimError::Cancelled { step: sim.steps, time: sim.time }.to_string()));
+            break;
+        }
+        // do not overshoot the end time by more than a sliver
+        let mut dt = sim.next_dt();
+        if sim.time + dt > end {
+            dt = (end - sim.time).max(1e-12);
+        }
+        if let Some(c) = &mut coupling {
+            c.before_step(&mut sim, dt);
+        }
+        match sim.step(dt) {
+            Ok(info) => {
+                if let Some(c) = &mut coupling {
+                    c.after_step(&mut sim, dt);
+                }
+                min_dt = min_dt.min(dt);
+                max_dt = max_dt.max(dt);
+                max_velocity = max_velocity.max(info.max_speed);
+                let bodies = coupling.as_ref().map(|c| c.samples(&sim)).unwrap_or_default();
+                writer.record(&sim, dt, &bodies)?;
+                if let Some(s) = &mut snapshots {
+                    s.record(&sim)?;
+                }
+                observer.progress(&Progress {
+                    step: sim.steps,
+                    simulated_time: sim.time,
+                    end_time: end,
+                    dt,
+                    particles: sim.particle_count(),
+                    solver_iterations: info.solver_iterations,
+                });
+            }
+            Err(e) => {
+                failure = Some((RunStatus::Failed, e.to_string()));
+                break;
+            }
+        }
+    }
+    writer.finish()?;
+    if let Some(s) = &mut snapshots {
+        s.finish()?;
+    }
+    let (status, reason) = match failure {
+        None => (RunStatus::Succeeded, None),
+        Some((s, r)) => (s, Some(r)),
+    };
+    let summary = Summary {
+        status,
+        reason,
+        case: case.name.clone(),
+        steps: sim.steps,
+        simulated_time: sim.time,
+        end_time: end,
+        wall_time_s: started.elapsed().as_secs_f64(),
+        particles: sim.particle_count(),
+        particles_removed: sim.removed,
+        max_velocity,
+        min_dt: if min_dt.is_finite() { min_dt } else { 0.0 },
+        max_dt,
+        mean_solver_iterations: if sim.steps > 0 { sim.total_solver_iterations as Real / sim.steps as Real } else { 0.0 },
+        stage_seconds: sim.stage_times,
+        n0: sim.params.n0,
+        scheme: sim.scheme.clone(),
+        version: env!("CARGO_PKG_VERSION").to_string(),
+    };
+    let json = serde_json::to_string_pretty(&summary).expect("summary serialises");
+    std::fs::write(out_dir.join("summary.json"), json + "\n")?;
+    Ok(summary)
+}
