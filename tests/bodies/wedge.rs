@@ -40,6 +40,17 @@ pub fn wedge_fit(overrides: &[String]) -> WedgeFit {
     }
     let (a, b) = fit_line(&t, &f);
     let c = b / (RHO * V.powi(3));
+    // diagnosis: the same coefficient from the impulse I = ∫F dt = C rho V³ (t - t0)² / 2,
+    // which averages out the bursts of the force as the wedge meets each particle row
+    let (mut impulse, mut ti, mut si) = (0.0, Vec::new(), Vec::new());
+    for s in &trace.steps {
+        impulse += s.force[k].y * s.dt;
+        if s.time > 0.35 * T_CHINE && s.time < 0.75 * T_CHINE && impulse > 0.0 {
+            ti.push(s.time);
+            si.push((2.0 * impulse / (RHO * V.powi(3))).sqrt());
+        }
+    }
+    let c_impulse = fit_line(&ti, &si).1.powi(2);
     let fit = WedgeFit {
         spacing: case.particle_spacing,
         c,
@@ -50,11 +61,12 @@ pub fn wedge_fit(overrides: &[String]) -> WedgeFit {
         coupling_seconds: trace.coupling_seconds,
     };
     println!(
-        "wedge l0 = {} m: C_F = {:.3} ({:+.1} % vs similarity 14.04, {:+.1} % vs Wagner 23.26), t0 = {:.3} ms, {} particles, {} steps, {:.1} s (coupling {:.3} s)",
+        "wedge l0 = {} m: C_F = {:.3} ({:+.1} % vs similarity 14.04, {:+.1} % vs Wagner 23.26; from the impulse {:.3}), t0 = {:.3} ms, {} particles, {} steps, {:.1} s (coupling {:.3} s)",
         fit.spacing,
         fit.c,
         100.0 * (fit.c / C_SIMILARITY - 1.0),
         100.0 * (fit.c / C_WAGNER - 1.0),
+        c_impulse,
         1e3 * fit.t0,
         fit.particles,
         fit.steps,
