@@ -38,9 +38,8 @@ pub struct StepRecord {
     /// Time at the end of the step.
     pub time: Real,
     pub dt: Real,
-    /// Fluid force and moment on each wall object during the step (N/m, N m/m).
+    /// Fluid force on each wall object during the step (N/m).
     pub force: Vec<Vec2>,
-    pub moment: Vec<Real>,
     /// Bodies at the end of the step.
     pub bodies: Vec<BodySample>,
 }
@@ -82,7 +81,6 @@ pub fn run(case: &Case, options: CouplingOptions, end: Option<Real>, mut each: i
             time: sim.time,
             dt,
             force: sim.loads.iter().map(|l| l.force).collect(),
-            moment: sim.loads.iter().map(|l| l.moment).collect(),
             bodies: coupling.samples(&sim),
         });
         each(&sim);
