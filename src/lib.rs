@@ -5,7 +5,7 @@
 
 pub mod bench;
 pub mod case;
-pub mod engine;
 pub mod coupling;
+pub mod engine;
 pub mod output;
 pub mod run;

@@ -1,0 +1,108 @@
+//! Shared helpers: load a shipped case with overrides, run it with the coupling, and
+//! keep the per-step loads and body samples.
+
+use mpsfsi::case::{load_case_file, Case};
+use mpsfsi::coupling::{BodySample, Coupling, CouplingOptions};
+use mpsfsi::engine::math::{Real, Vec2};
+use mpsfsi::engine::{SimError, Simulation};
+use std::path::PathBuf;
+use std::time::Instant;
+
+pub const RHO: Real = 1000.0;
+
+pub fn case_path(name: &str) -> PathBuf {
+    PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("cases").join(name)
+}
+
+/// A shipped case with `--set`-style overrides.
+pub fn shipped(name: &str, overrides: &[String]) -> Case {
+    load_case_file(&case_path(name), overrides).unwrap_or_else(|e| panic!("{name}: {e}"))
+}
+
+/// Overrides giving a rectangular tank of fluid [-w, w] x [-depth, 0] with walls up to `top`.
+pub fn tank(w: Real, depth: Real, top: Real) -> Vec<String> {
+    vec![
+        format!("fluid_blocks=[{{\"polygon\": [[{a}, {d}], [{w}, {d}], [{w}, 0.0], [{a}, 0.0]]}}]", a = -w, d = -depth),
+        format!(
+            "walls=[{{\"name\": \"tank\", \"polyline\": [[{a}, {top}], [{a}, {d}], [{w}, {d}], [{w}, {top}]]}}]",
+            a = -w,
+            d = -depth
+        ),
+        format!("domain={{\"min\": [{}, {}], \"max\": [{}, {}]}}", -w - 0.05, -depth - 0.05, w + 0.05, top + 0.3),
+    ]
+}
+
+/// One step's record.
+#[derive(Debug, Clone)]
+pub struct StepRecord {
+    /// Time at the end of the step.
+    pub time: Real,
+    pub dt: Real,
+    /// Fluid force on each wall object during the step (N/m).
+    pub force: Vec<Vec2>,
+    /// Bodies at the end of the step.
+    pub bodies: Vec<BodySample>,
+}
+
+pub struct Trace {
+    pub initial: Vec<BodySample>,
+    pub steps: Vec<StepRecord>,
+    pub wall_names: Vec<String>,
+    pub particles: usize,
+    pub wall_seconds: f64,
+    pub coupling_seconds: f64,
+    pub error: Option<SimError>,
+}
+
+impl Trace {
+    pub fn wall(&self, name: &str) -> usize {
+        self.wall_names.iter().position(|n| n == name).unwrap_or_else(|| panic!("no wall {name}"))
+    }
+}
+
+/// Run `case` to `end` (or its own end time), stepping the coupling around every step.
+pub fn run(case: &Case, options: CouplingOptions, end: Option<Real>, mut each: impl FnMut(&Simulation)) -> Trace {
+    let clock = Instant::now();
+    let mut sim = Simulation::new(case);
+    let mut coupling = Coupling::with_options(case, &sim, options).expect("case has bodies");
+    let end = end.unwrap_or(case.time.end);
+    let initial = coupling.samples(&sim);
+    let mut steps = Vec::new();
+    let mut error = None;
+    while sim.time < end - 1e-12 {
+        let dt = sim.next_dt().min(end - sim.time);
+        coupling.before_step(&mut sim, dt);
+        if let Err(e) = sim.step(dt) {
+            error = Some(e);
+            break;
+        }
+        coupling.after_step(&mut sim, dt);
+        steps.push(StepRecord {
+            time: sim.time,
+            dt,
+            force: sim.loads.iter().map(|l| l.force).collect(),
+            bodies: coupling.samples(&sim),
+        });
+        each(&sim);
+    }
+    Trace {
+        initial,
+        steps,
+        wall_names: sim.wall_names(),
+        particles: sim.particle_count(),
+        wall_seconds: clock.elapsed().as_secs_f64(),
+        coupling_seconds: coupling.seconds,
+        error,
+    }
+}
+
+/// Least-squares line y = a + b x.
+pub fn fit_line(x: &[Real], y: &[Real]) -> (Real, Real) {
+    let n = x.len() as Real;
+    let mx = x.iter().sum::<Real>() / n;
+    let my = y.iter().sum::<Real>() / n;
+    let sxy: Real = x.iter().zip(y).map(|(a, b)| (a - mx) * (b - my)).sum();
+    let sxx: Real = x.iter().map(|a| (a - mx) * (a - mx)).sum();
+    let b = sxy / sxx;
+    (my - b * mx, b)
+}

@@ -1,0 +1,10 @@
+//! Rigid bodies and fluid–structure coupling (issue 3): the rapier coupling, the
+//! added-mass stabilisation, body walls in the number density, buoyancy, flotation
+//! and the slamming load of a wedge against the similarity solution.
+
+mod apex;
+mod common;
+mod coupling;
+mod hydrostatics;
+mod probe;
+mod wedge;
