@@ -152,8 +152,8 @@ pub fn bench_cases(quick: bool) -> io::Result<Vec<BenchCase>> {
         cases.push(BenchCase {
             name: "hydrostatic",
             base: read_case_value(&hydrostatic)?,
-            spacings: if quick { vec![0.05, 0.025, 0.0125] } else { vec![0.05, 0.025, 0.0125, 0.00625] },
-            overrides: if quick { vec!["time.end=0.5".into()] } else { vec!["time.end=2.0".into()] },
+            spacings: if quick { vec![0.05, 0.0333, 0.025] } else { vec![0.05, 0.025, 0.0125, 0.00625] },
+            overrides: if quick { vec!["time.end=0.3".into()] } else { vec!["time.end=2.0".into()] },
             measure: Measure::Hydrostatic,
         });
     }

@@ -198,7 +198,13 @@ pub fn interpretation(rows: &[&BenchResult]) -> String {
         let mut mine: Vec<&&BenchResult> = rows.iter().filter(|r| r.variant == *name && r.error.is_finite()).collect();
         mine.sort_by(|a, b| b.spacing.total_cmp(&a.spacing));
         if mine.len() >= 2 {
-            let decreasing = mine.windows(2).all(|w| w[1].error <= w[0].error);
+            let trend = if mine.windows(2).all(|w| w[1].error <= w[0].error) {
+                "decreasing with refinement"
+            } else if mine.windows(2).all(|w| w[1].error >= w[0].error) {
+                "growing with refinement: a bias the spacing does not remove, or a model error"
+            } else {
+                "not monotone in the spacing"
+            };
             let (first, last) = (mine[0], mine[mine.len() - 1]);
             let order = (last.error / first.error).ln() / (last.spacing / first.spacing).ln();
             let _ = writeln!(
@@ -208,9 +214,29 @@ pub fn interpretation(rows: &[&BenchResult]) -> String {
                 first.spacing,
                 fmt_err(last.error),
                 last.spacing,
-                if decreasing { "decreasing with refinement" } else { "not monotone in the spacing" },
+                trend,
                 order
             );
+        }
+    }
+    // variants that the engine does not tell apart (same errors at every spacing)
+    for (k, a) in names.iter().enumerate() {
+        for b in &names[..k] {
+            let pairs: Vec<(&&BenchResult, &&BenchResult)> = rows
+                .iter()
+                .filter(|r| r.variant == *a)
+                .filter_map(|r| rows.iter().find(|q| q.variant == *b && q.spacing == r.spacing).map(|q| (r, q)))
+                .collect();
+            let same = !pairs.is_empty()
+                && pairs.iter().all(|(r, q)| r.error.is_finite() && q.error.is_finite() && (r.error - q.error).abs() <= 1e-6 * q.error.abs());
+            if same {
+                let ratio = pairs.iter().map(|(r, q)| r.wall_time_s / q.wall_time_s).sum::<f64>() / pairs.len() as f64;
+                let _ = writeln!(
+                    md,
+                    "- `{a}` gives the errors of `{b}` to 1e-6 at every spacing: the engine does not distinguish them here; it costs {ratio:.1}× the wall time."
+                );
+                break;
+            }
         }
     }
     let front = pareto_front(rows);

@@ -117,3 +117,38 @@ fn a_coarse_dam_break_runs_and_is_scored_against_martin_and_moyce() {
     // RMS error above 50%; anything below says the measure follows the surge
     assert!(r.error < 0.5, "{r:?}");
 }
+
+/// The whole `--quick` benchmark (about a few minutes): `cargo test --release --test
+/// output -- --ignored quick_bench`. Writes to target/tmp/output-suite/quick-bench.
+#[test]
+#[ignore]
+fn quick_bench_writes_its_report() {
+    let out_dir = crate::scratch_dir("quick-bench");
+    let started = std::time::Instant::now();
+    mpsfsi::bench::run(mpsfsi::bench::BenchOptions { quick: true, operators: false, stress: false, out_dir: out_dir.clone() }).unwrap();
+    let seconds = started.elapsed().as_secs_f64();
+    eprintln!("quick bench: {seconds:.1} s");
+    let results = std::fs::read_to_string(out_dir.join("results.csv")).unwrap();
+    assert!(results.starts_with("case,variant,spacing,particles,steps,wall_time_s,error"));
+    assert!(results.lines().count() > 1);
+    assert!(out_dir.join("report.md").exists() && out_dir.join("dam_break.svg").exists());
+    assert!(seconds < 300.0, "--quick must finish in under 5 minutes: {seconds:.0} s");
+}
+
+#[test]
+fn the_interpretation_is_computed_from_the_rows() {
+    let mut rows = Vec::new();
+    for (variant, scale, cost) in [("fast", 1.0, 1.0), ("copy", 1.0, 3.0), ("better", 0.5, 2.0)] {
+        for (k, spacing) in [0.04, 0.02, 0.01].into_iter().enumerate() {
+            let mut r = result(variant, cost * 4f64.powi(k as i32), scale * 0.2 / 2f64.powi(k as i32));
+            r.spacing = spacing;
+            rows.push(r);
+        }
+    }
+    let refs: Vec<&BenchResult> = rows.iter().collect();
+    let text = mpsfsi::bench::report::interpretation(&refs);
+    assert!(text.contains("`fast`: error 20.00% at l0 = 0.0400 to 5.00% at l0 = 0.0100 (decreasing with refinement; observed order 1.00)"), "{text}");
+    assert!(text.contains("`copy` gives the errors of `fast`"), "{text}");
+    assert!(!text.contains("`better` gives the errors"), "{text}");
+    assert!(text.contains("Cheapest run within 5%: `better` at l0 = 0.0200, 8.00 s"), "{text}");
+}
