@@ -3,9 +3,9 @@
 //!
 //! Data flows one way: [`case`] -> [`engine`] scene -> step pipeline -> [`output`].
 
+pub mod bench;
 pub mod case;
 pub mod engine;
 pub mod coupling;
 pub mod output;
 pub mod run;
-pub mod bench;

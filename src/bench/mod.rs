@@ -16,9 +16,13 @@
 //!
 //! Outputs in the output folder: `results.csv`, `report.md`, one `<case>.svg` of error
 //! against wall time per case (log-log, a line per variant), and `runs/` with every
-//! run directory.
+//! run directory. `--operators` adds the operator convergence study of
+//! [`operators`] (paper 000 §5) as `operators.md`.
+//!
+//! Benchmarks and studies report results; the tests assert them against the papers.
 
 pub mod measure;
+pub mod operators;
 pub mod reference;
 pub mod report;
 
@@ -429,7 +433,7 @@ pub fn run(options: BenchOptions) -> io::Result<()> {
     let total = started.elapsed().as_secs_f64();
     report::write_report(&options.out_dir, &cases, &results, &stress, options.quick, total)?;
     if options.operators {
-        report::note_operators(&options.out_dir)?;
+        report::write_operators(&options.out_dir)?;
     }
     Ok(())
 }

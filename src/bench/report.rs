@@ -258,11 +258,11 @@ pub fn interpretation(rows: &[&BenchResult]) -> String {
     md
 }
 
-/// `--operators`: the operator convergence study lives in `bench::operators` (written
-/// separately); until it is wired here the report says so.
-pub fn note_operators(out_dir: &Path) -> io::Result<()> {
-    std::fs::write(
-        out_dir.join("operators.md"),
-        "# Operator convergence study\n\nNot run by this harness yet: see `bench::operators` (paper 000 §5).\n",
-    )
+/// `--operators`: the operator convergence study of [`super::operators`] (paper 000
+/// §5) as `operators.md`.
+pub fn write_operators(out_dir: &Path) -> io::Result<()> {
+    let rows = super::operators::convergence_table();
+    let mut md = String::from("# Operator convergence study (paper 000 §5)\n\n");
+    md.push_str(&super::operators::convergence_markdown(&rows));
+    std::fs::write(out_dir.join("operators.md"), md)
 }
