@@ -156,7 +156,11 @@ pub fn write_report(
             .iter()
             .map(|v| Series {
                 name: v.name.to_string(),
-                points: rows.iter().filter(|r| r.variant == v.name).map(|r| (r.wall_time_s, r.error)).collect(),
+                points: {
+                    let mut mine: Vec<&&BenchResult> = rows.iter().filter(|r| r.variant == v.name).collect();
+                    mine.sort_by(|a, b| b.spacing.total_cmp(&a.spacing));
+                    mine.iter().map(|r| (r.wall_time_s, r.error)).collect()
+                },
             })
             .collect();
         match log_log_svg(&format!("{}: error against wall time", case.name), "wall time (s)", "relative error", &series) {

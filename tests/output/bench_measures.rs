@@ -152,3 +152,21 @@ fn the_interpretation_is_computed_from_the_rows() {
     assert!(!text.contains("`better` gives the errors"), "{text}");
     assert!(text.contains("Cheapest run within 5%: `better` at l0 = 0.0200, 8.00 s"), "{text}");
 }
+
+/// The CFL sweep of `--stress` on the coarse dam break (about a minute).
+#[test]
+#[ignore]
+fn cfl_sweep_reports_every_variant() {
+    let cases = mpsfsi::bench::bench_cases(true).unwrap();
+    let dir = crate::scratch_dir("cfl-sweep");
+    let rows = mpsfsi::bench::report::cfl_sweep(&cases, &dir);
+    for v in mpsfsi::bench::variants() {
+        let mine: Vec<_> = rows.iter().filter(|r| r.variant == v.name).collect();
+        assert_eq!(mine.len(), 4, "{}", v.name);
+        for r in mine {
+            eprintln!("{} cfl {} completed {} error {:.3e} {}", r.variant, r.cfl, r.completed, r.error, r.note);
+            // completed means a measured front; a failure has its diagnosis
+            assert!(r.completed == r.error.is_finite() || !r.note.is_empty());
+        }
+    }
+}

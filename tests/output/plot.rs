@@ -70,3 +70,13 @@ fn log_log_svg_draws_a_line_per_series_and_skips_non_positive_points() {
     assert_well_formed(&svg);
     assert_eq!(polylines(&svg), vec![3, 2]);
 }
+
+/// Writes the load plot of a run's loads.csv for a look: `LOADS_CSV=path cargo test
+/// --release --test output -- --ignored look_at`.
+#[test]
+#[ignore]
+fn look_at_a_loads_plot() {
+    let path = std::env::var("LOADS_CSV").expect("LOADS_CSV names a loads.csv");
+    let svg = loads_svg(&std::fs::read_to_string(&path).unwrap(), "loads").unwrap();
+    std::fs::write(std::path::Path::new(&path).with_extension("svg"), svg).unwrap();
+}
