@@ -226,10 +226,25 @@ fn load_series(rows: &[LoadRow], body: &str) -> (Vec<Real>, Vec<LoadRow>) {
     (picked.iter().map(|r| r.time).collect(), picked)
 }
 
-/// The errors of a finished run: (error, measure, error2, measure2, note).
-pub fn score(measure: &Measure, case: &Case, dir: &Path, summary: &Summary) -> io::Result<(Real, String, Real, String, String)> {
+/// What the scoring needs of a run's summary.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct RunOutcome {
+    pub succeeded: bool,
+    pub simulated_time: Real,
+    /// Fluid particles at the end.
+    pub particles: usize,
+}
+
+impl From<&Summary> for RunOutcome {
+    fn from(s: &Summary) -> Self {
+        Self { succeeded: s.status == RunStatus::Succeeded, simulated_time: s.simulated_time, particles: s.particles }
+    }
+}
+
+/// The errors of a finished run in `dir`: (error, measure, error2, measure2, note).
+pub fn score(measure: &Measure, case: &Case, dir: &Path, summary: &RunOutcome) -> io::Result<(Real, String, Real, String, String)> {
     match measure {
-        Measure::Hydrostatic if summary.status != RunStatus::Succeeded => {
+        Measure::Hydrostatic if !summary.succeeded => {
             Ok((Real::NAN, "tank load vs water weight".into(), Real::NAN, "mid-depth probe vs rho g d".into(), String::new()))
         }
         Measure::Hydrostatic => {
@@ -393,7 +408,7 @@ pub fn run_one(bench: &BenchCase, variant: &Variant, spacing: Real, runs_dir: &P
     // a run that failed is still scored on what it wrote: the measures return NaN when
     // the outputs do not cover the comparison window (the status column says it failed)
     let reason = summary.reason.clone().map(|r| format!("{r}; ")).unwrap_or_default();
-    match score(&bench.measure, &case, &dir, &summary) {
+    match score(&bench.measure, &case, &dir, &RunOutcome::from(&summary)) {
         Ok((e1, m1, e2, m2, note)) => {
             result.error = e1;
             result.error_measure = m1;

@@ -170,3 +170,82 @@ fn cfl_sweep_reports_every_variant() {
         }
     }
 }
+
+fn wedge_case() -> mpsfsi::case::Case {
+    mpsfsi::case::parse_case_value(serde_json::json!({
+        "name": "wedge",
+        "fluid": { "density": 1000.0, "kinematic_viscosity": 0.0, "gravity": [0.0, 0.0] },
+        "particle_spacing": 0.01,
+        "domain": { "min": [-1.05, -1.05], "max": [1.05, 0.6] },
+        "fluid_blocks": [ { "polygon": [[-1.0, -1.0], [1.0, -1.0], [1.0, 0.0], [-1.0, 0.0]] } ],
+        "walls": [ { "name": "tank", "polyline": [[-1.0, 0.3], [-1.0, -1.0], [1.0, -1.0], [1.0, 0.3]] } ],
+        "bodies": [ {
+            "name": "wedge",
+            "polygon": [[0.0, 0.0], [0.25, 0.1443], [0.25, 0.3], [-0.25, 0.3], [-0.25, 0.1443]],
+            "position": [0.0, 0.02],
+            "motion": { "type": "prescribed", "velocity": [0.0, -6.15] }
+        } ],
+        "time": { "end": 0.02, "max_dt": 1.0e-4 },
+        "output": { "load_interval": 1.0e-4 }
+    }))
+    .unwrap()
+}
+
+#[test]
+fn the_wedge_score_is_zero_for_the_similarity_force_and_measures_a_wrong_one() {
+    use mpsfsi::bench::{score, Measure, RunOutcome};
+    let case = wedge_case();
+    let (rho, v): (f64, f64) = (1000.0, 6.15);
+    // the keel starts 2 cm above the water: contact at 0.02 / V
+    let contact = 0.02 / v;
+    let outcome = RunOutcome { succeeded: true, simulated_time: 0.02, particles: 1000 };
+    for (c, expected_error) in [(14.04, 0.0), (23.26, 23.26 / 14.04 - 1.0)] {
+        let dir = crate::scratch_dir(&format!("wedge-score-{c}"));
+        let mut text = String::from("time,body,fx,fy,mz\n");
+        for k in 1..=200 {
+            let t = k as f64 * 1e-4;
+            let mid = t - 0.5e-4;
+            // upward force on the wedge (the motion is downward), junk on the tank
+            let fy = if mid > contact { c * rho * v.powi(3) * (mid - contact) } else { 0.0 };
+            text.push_str(&format!("{t:.9e},tank,1e5,-3e5,0\n{t:.9e},wedge,0,{fy:.12e},0\n"));
+        }
+        std::fs::write(dir.join("loads.csv"), text).unwrap();
+        let (error, _, _, _, note) = score(&Measure::Wedge, &case, &dir, &outcome).unwrap();
+        assert!((error - expected_error).abs() < 1e-6, "C = {c}: error {error} ({note})");
+    }
+}
+
+#[test]
+fn the_hydrostatic_score_compares_the_tank_load_with_the_water_weight() {
+    use mpsfsi::bench::{score, Measure, RunOutcome};
+    let case = mpsfsi::case::parse_case_value(serde_json::json!({
+        "name": "tank",
+        "fluid": { "density": 1000.0, "gravity": [0.0, -9.81] },
+        "particle_spacing": 0.01,
+        "domain": { "min": [-0.1, -0.1], "max": [1.1, 0.8] },
+        "fluid_blocks": [ { "polygon": [[0.0, 0.0], [1.0, 0.0], [1.0, 0.5], [0.0, 0.5]] } ],
+        "walls": [ { "name": "tank", "polyline": [[0.0, 0.7], [0.0, 0.0], [1.0, 0.0], [1.0, 0.7]] } ],
+        "time": { "end": 1.0 },
+        "output": { "load_interval": 0.01, "probes": [ { "name": "mid_depth", "position": [0.5, 0.25] } ] }
+    }))
+    .unwrap();
+    let particles = 5000;
+    let weight = particles as f64 * 1000.0 * 1e-4 * -9.81;
+    let dir = crate::scratch_dir("hydrostatic-score");
+    let (mut loads, mut probes) = (String::from("time,body,fx,fy,mz\n"), String::from("time,probe,pressure\n"));
+    for k in 1..=100 {
+        let t = k as f64 * 0.01;
+        // a start-up transient in the first half is ignored; 2% heavy and 1% low after
+        let fy = if t <= 0.5 { 0.0 } else { 1.02 * weight };
+        loads.push_str(&format!("{t:.9e},tank,0,{fy:.12e},0\n"));
+        probes.push_str(&format!("{t:.9e},mid_depth,{:.12e}\n", if t < 0.5 { 0.0 } else { 0.99 * 1000.0 * 9.81 * 0.25 }));
+    }
+    std::fs::write(dir.join("loads.csv"), loads).unwrap();
+    std::fs::write(dir.join("probes.csv"), probes).unwrap();
+    let outcome = RunOutcome { succeeded: true, simulated_time: 1.0, particles };
+    let (load_error, _, probe_error, _, _) = score(&Measure::Hydrostatic, &case, &dir, &outcome).unwrap();
+    assert!((load_error - 0.02).abs() < 1e-9, "{load_error}");
+    assert!((probe_error - 0.01).abs() < 1e-9, "{probe_error}");
+    let failed = RunOutcome { succeeded: false, ..outcome };
+    assert!(score(&Measure::Hydrostatic, &case, &dir, &failed).unwrap().0.is_nan(), "a failed tank is not scored");
+}
