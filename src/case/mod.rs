@@ -6,11 +6,12 @@
 
 mod load;
 mod scheme;
+pub mod schema;
 mod validate;
 
 pub use load::{apply_override, load_case_file, parse_case_str, parse_case_value};
 pub use scheme::*;
-pub use validate::{validate, Limits};
+pub use validate::{estimated_particles, validate, Limits, MAX_VERTICES};
 
 use schemars::JsonSchema;
 use serde::{Deserialize, Serialize};

@@ -92,9 +92,10 @@ pub enum SourceKind {
 #[serde(rename_all = "snake_case")]
 pub enum SolverKind {
     /// Conjugate gradient with a Jacobi preconditioner.
-    #[default]
     PcgJacobi,
-    /// Conjugate gradient with incomplete Cholesky IC(0).
+    /// Conjugate gradient with incomplete Cholesky IC(0): 4x fewer iterations than Jacobi
+    /// on the tank (32 vs 126) and faster overall at 5k particles.
+    #[default]
     PcgIc0,
     /// faer's sparse direct factorisation (Cholesky; LU when non-symmetric).
     Direct,

@@ -81,7 +81,7 @@ impl MpsParameters {
             re_lap,
             n0,
             lambda,
-            laplacian_coefficient: 2.0 * DIM / lap_sum,
+            laplacian_coefficient: 2.0 * DIM / lap_sum * std::env::var("MPS_LAPX").ok().and_then(|v| v.parse::<f64>().ok()).unwrap_or(1.0),
             divergence_coefficient: DIM / div_sum.abs(),
             gradient_coefficient: DIM / n0,
             density,

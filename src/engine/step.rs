@@ -148,7 +148,7 @@ fn step<K: Kernel>(sim: &mut Simulation, dt: Real) -> Result<StepInfo, SimError>
     sim.stage_times.number_density += seconds(&mut clock);
 
     // PPE: source (HS + ECS, paper 004 eqs. 3, 10-11), Laplacian (HL, eq. 9), Neumann walls
-    compute_neumann_gradients(sim);
+    compute_neumann_gradients(sim, dt);
     assemble_pressure_equation::<K>(sim, &weights, dt);
     sim.stage_times.assemble += seconds(&mut clock);
     let (iterations, residual) = solve_pressure(sim)?;
@@ -330,20 +330,38 @@ fn detect_free_surface<K: Kernel>(sim: &mut Simulation) {
 
 /// The extrapolation gradient c = rho (g - a_w) of every wall contact (module docs);
 /// zero for the PND source (virtual points take p_i).
-fn compute_neumann_gradients(sim: &mut Simulation) {
+fn compute_neumann_gradients(sim: &mut Simulation, dt: Real) {
     let rho = sim.params.density;
     let g = vec2(sim.params.gravity);
     let extrapolate = sim.scheme.source != SourceKind::Pnd;
-    sim.scratch.neumann = sim
-        .contacts
-        .contacts
-        .par_iter()
-        .map(|c| if extrapolate { (g - c.wall_acceleration) * rho } else { Vec2::zeros() })
+    let kinematic = std::env::var("MPS_KIN").is_ok();
+    let u = &sim.particles.velocity;
+    let contacts = &sim.contacts;
+    sim.scratch.neumann = (0..contacts.offsets.len() - 1)
+        .into_par_iter()
+        .flat_map_iter(|i| {
+            contacts.of(i).iter().map(move |c| {
+                if !extrapolate {
+                    return Vec2::zeros();
+                }
+                if kinematic {
+                    // normal: stop the predicted approach (u* - u_w)·n in one step; tangential: rho (g - a_w)
+                    let n = c.normal;
+                    let approach = (u[i] - c.wall_velocity).dot(&n).min(0.0);
+                    let body = g - c.wall_acceleration;
+                    return n * (rho / dt * approach) + (body - n * body.dot(&n)) * rho;
+                }
+                (g - c.wall_acceleration) * rho
+            })
+        })
         .collect();
 }
 
 /// Wall share of the HS divergence: -c ∇Z · (u_i - u_w) (virtual points move with the wall).
 fn add_wall_divergence(div: &mut [Real], u: &[Vec2], contacts: &WallContacts, c: Real) {
+    if std::env::var("MPS_KIN").is_ok() {
+        return;
+    }
     div.par_iter_mut().enumerate().for_each(|(i, d)| {
         for ct in contacts.of(i) {
             *d -= c * ct.terms.number_density_gradient.dot(&(u[i] - ct.wall_velocity));

@@ -1,0 +1,117 @@
+//! Command line of DESIGN.md §2.1: `run`, `check`, `schema`, `serve`, `bench`.
+//!
+//! Exit codes: 0 success; 1 a run that failed or was cancelled (the run directory
+//! keeps what was written); 2 a rejected case or bad arguments; 3 an I/O or service error.
+
+mod check;
+mod external;
+mod progress;
+mod run;
+
+use clap::{Parser, Subcommand};
+use std::net::SocketAddr;
+use std::path::PathBuf;
+
+pub const EXIT_FAILED_RUN: i32 = 1;
+pub const EXIT_REJECTED: i32 = 2;
+pub const EXIT_ERROR: i32 = 3;
+
+#[derive(Parser, Debug)]
+#[command(name = "mpsfsi", version, about = "2D MPS fluid-structure simulation: water-entry loads on rigid bodies")]
+pub struct Cli {
+    #[command(subcommand)]
+    pub command: Command,
+}
+
+#[derive(Subcommand, Debug)]
+pub enum Command {
+    /// Run a case and write the run directory (loads.csv, bodies.csv, probes.csv, summary.json, snapshots/).
+    Run {
+        /// Case file (JSON, DESIGN.md §2.2).
+        case: PathBuf,
+        /// Run directory to write (created if missing).
+        #[arg(long)]
+        out: PathBuf,
+        /// Override one field by its dotted path, e.g. `--set time.end=0.01`,
+        /// `--set scheme.laplacian=classic`, `--set bodies[0].motion.mass=12`. Repeatable.
+        #[arg(long = "set", value_name = "PATH=VALUE")]
+        set: Vec<String>,
+    },
+    /// Validate a case and print its particle count, estimated steps and kernel parameters.
+    Check {
+        case: PathBuf,
+        #[arg(long = "set", value_name = "PATH=VALUE")]
+        set: Vec<String>,
+        /// Particle limit to validate against (the service's limit may be lower).
+        #[arg(long)]
+        max_particles: Option<usize>,
+    },
+    /// Print the JSON Schema of the case format (the text of api/case.schema.json).
+    Schema,
+    /// Run the HTTP job service (DESIGN.md §2.4).
+    Serve(ServeArgs),
+    /// Run the run-time-versus-error study and write its report (DESIGN.md §5).
+    Bench(BenchArgs),
+}
+
+#[derive(clap::Args, Debug, Clone)]
+pub struct ServeArgs {
+    /// Address to listen on (port 0 picks a free port).
+    #[arg(long, default_value = "127.0.0.1:8080", env = "MPSFSI_ADDR")]
+    pub addr: SocketAddr,
+    /// Directory holding jobs and their results (survives restarts).
+    #[arg(long, env = "MPSFSI_DATA")]
+    pub data: Option<PathBuf>,
+    /// Simulations run side by side.
+    #[arg(long, env = "MPSFSI_WORKERS")]
+    pub workers: Option<usize>,
+    /// Queued jobs beyond which submissions get 503.
+    #[arg(long, env = "MPSFSI_QUEUE_CAPACITY")]
+    pub queue_capacity: Option<usize>,
+    /// Largest particle count a submitted case may create.
+    #[arg(long, env = "MPSFSI_MAX_PARTICLES")]
+    pub max_particles: Option<usize>,
+    /// Largest request body in bytes (413 beyond).
+    #[arg(long, env = "MPSFSI_MAX_BODY_BYTES")]
+    pub max_body_bytes: Option<usize>,
+}
+
+#[derive(clap::Args, Debug, Clone)]
+pub struct BenchArgs {
+    /// Fewer spacings and variants (minutes, not hours).
+    #[arg(long)]
+    pub quick: bool,
+    /// Include the operator convergence study.
+    #[arg(long)]
+    pub operators: bool,
+    /// Include the stress (throughput) study.
+    #[arg(long)]
+    pub stress: bool,
+    /// Directory for report.md, results.csv and the plots.
+    #[arg(long)]
+    pub out: PathBuf,
+}
+
+/// Run one command; returns the process exit code.
+pub fn main(cli: Cli) -> i32 {
+    match cli.command {
+        Command::Run { case, out, set } => run::run(&case, &out, &set),
+        Command::Check { case, set, max_particles } => check::check(&case, &set, max_particles),
+        Command::Schema => {
+            print!("{}", mpsfsi::case::schema::case_schema_json());
+            0
+        }
+        Command::Serve(args) => external::serve(args),
+        Command::Bench(args) => external::bench(args),
+    }
+}
+
+/// Print a rejected case as one line: `error: invalid case: PATH: reason`.
+pub fn report_case_error(e: &mpsfsi::case::CaseError) -> i32 {
+    if e.path.is_empty() {
+        eprintln!("error: invalid case: {}", e.message);
+    } else {
+        eprintln!("error: invalid case: {}: {}", e.path, e.message);
+    }
+    EXIT_REJECTED
+}

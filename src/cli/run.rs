@@ -1,0 +1,55 @@
+//! `mpsfsi run CASE --out DIR [--set PATH=VALUE]...`
+
+use super::progress::ProgressBarObserver;
+use super::{report_case_error, EXIT_ERROR, EXIT_FAILED_RUN};
+use mpsfsi::case::{load_case_file, validate, Limits};
+use mpsfsi::run::{run_case, RunError, RunStatus};
+use std::path::Path;
+
+pub fn run(case_path: &Path, out: &Path, overrides: &[String]) -> i32 {
+    let case = match load_case_file(case_path, overrides) {
+        Ok(case) => case,
+        Err(e) => return report_case_error(&e),
+    };
+    if let Err(e) = validate(&case, &Limits::default()) {
+        return report_case_error(&e);
+    }
+    if let Err(e) = std::fs::create_dir_all(out) {
+        eprintln!("error: cannot create the run directory {}: {e}", out.display());
+        return EXIT_ERROR;
+    }
+    let mut observer = ProgressBarObserver::for_stderr();
+    let result = run_case(&case, out, &mut observer);
+    observer.finish();
+    match result {
+        Ok(summary) => {
+            let line = format!(
+                "{} steps to t = {:.6} s, {} particles ({} removed), max speed {:.3} m/s, {:.1} s wall time; results in {}",
+                summary.steps,
+                summary.simulated_time,
+                summary.particles,
+                summary.particles_removed,
+                summary.max_velocity,
+                summary.wall_time_s,
+                out.display()
+            );
+            match summary.status {
+                RunStatus::Succeeded => {
+                    println!("succeeded: {line}");
+                    0
+                }
+                RunStatus::Failed | RunStatus::Cancelled => {
+                    let status = if summary.status == RunStatus::Failed { "failed" } else { "cancelled" };
+                    let reason = summary.reason.as_deref().unwrap_or("no reason given");
+                    eprintln!("error: run {status}: {reason} ({line})");
+                    EXIT_FAILED_RUN
+                }
+            }
+        }
+        Err(RunError::Case(e)) => report_case_error(&e),
+        Err(e) => {
+            eprintln!("error: {e}");
+            EXIT_ERROR
+        }
+    }
+}

@@ -1,0 +1,426 @@
+//! One test per rejection class of `case::validate`.
+
+use crate::{assert_error, base_case, base_value};
+use mpsfsi::case::{parse_case_value, validate, Case, CaseError, Limits};
+use serde_json::{json, Value};
+
+/// Validate the base case after `edit` on its JSON; the error it must give.
+#[track_caller]
+fn rejected_json(edit: impl FnOnce(&mut Value)) -> CaseError {
+    let mut v = base_value();
+    edit(&mut v);
+    let case = parse_case_value(v).expect("the edited case still parses");
+    validate(&case, &Limits::default()).expect_err("the edited case must be rejected")
+}
+
+/// Validate the base case after `edit` on the Rust value (for what JSON cannot say).
+#[track_caller]
+fn rejected(edit: impl FnOnce(&mut Case)) -> CaseError {
+    let mut case = base_case();
+    edit(&mut case);
+    validate(&case, &Limits::default()).expect_err("the edited case must be rejected")
+}
+
+#[test]
+fn base_case_is_valid() {
+    validate(&base_case(), &Limits::default()).expect("the base case is valid");
+}
+
+#[test]
+fn shipped_cases_are_valid() {
+    let dir = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("cases");
+    let mut seen = 0;
+    for entry in std::fs::read_dir(&dir).expect("cases/ exists") {
+        let path = entry.unwrap().path();
+        if path.extension().is_some_and(|e| e == "json") {
+            let case = mpsfsi::case::load_case_file(&path, &[]).unwrap_or_else(|e| panic!("{}: {e}", path.display()));
+            validate(&case, &Limits::default()).unwrap_or_else(|e| panic!("{}: {e}", path.display()));
+            seen += 1;
+        }
+    }
+    assert!(seen > 0, "no case found in {}", dir.display());
+}
+
+#[test]
+fn non_finite_numbers_name_their_path() {
+    let e = rejected(|c| c.fluid.gravity[1] = f64::NAN);
+    assert_error(&e, "fluid.gravity[1]", "finite");
+    let e = rejected(|c| c.bodies[1].polygon[2][0] = f64::INFINITY);
+    assert_error(&e, "bodies[1].polygon[2][0]", "finite");
+    let e = rejected(|c| c.scheme.max_speed = Some(f64::NEG_INFINITY));
+    assert_error(&e, "scheme.max_speed", "finite");
+    let e = rejected(|c| c.output.probes[1].position[1] = f64::NAN);
+    assert_error(&e, "output.probes[1].position[1]", "finite");
+}
+
+#[test]
+fn non_finite_inside_motion_names_the_tagged_fields() {
+    let e = rejected(|c| {
+        if let mpsfsi::case::Motion::Free { velocity, .. } = &mut c.bodies[1].motion {
+            velocity[0] = f64::INFINITY;
+        }
+    });
+    assert_error(&e, "bodies[1].motion.velocity[0]", "finite");
+}
+
+#[test]
+fn non_positive_density() {
+    assert_error(&rejected_json(|v| v["fluid"]["density"] = json!(0.0)), "fluid.density", "positive");
+    assert_error(&rejected_json(|v| v["fluid"]["density"] = json!(-1000.0)), "fluid.density", "positive");
+}
+
+#[test]
+fn negative_viscosity() {
+    let e = rejected_json(|v| v["fluid"]["kinematic_viscosity"] = json!(-1.0e-6));
+    assert_error(&e, "fluid.kinematic_viscosity", "negative");
+}
+
+#[test]
+fn zero_viscosity_is_allowed() {
+    let mut case = base_case();
+    case.fluid.kinematic_viscosity = 0.0;
+    validate(&case, &Limits::default()).expect("inviscid is valid");
+}
+
+#[test]
+fn non_positive_particle_spacing() {
+    assert_error(&rejected_json(|v| v["particle_spacing"] = json!(0.0)), "particle_spacing", "positive");
+    assert_error(&rejected_json(|v| v["particle_spacing"] = json!(-0.01)), "particle_spacing", "positive");
+}
+
+#[test]
+fn non_positive_time_control() {
+    assert_error(&rejected_json(|v| v["time"]["end"] = json!(0.0)), "time.end", "positive");
+    assert_error(&rejected_json(|v| v["time"]["cfl"] = json!(-0.2)), "time.cfl", "positive");
+    assert_error(&rejected_json(|v| v["time"]["max_dt"] = json!(0.0)), "time.max_dt", "positive");
+}
+
+#[test]
+fn kernel_radii_must_exceed_one_spacing() {
+    assert_error(&rejected_json(|v| v["scheme"]["radius"] = json!(0.0)), "scheme.radius", "greater than 1");
+    assert_error(&rejected_json(|v| v["scheme"]["radius"] = json!(1.0)), "scheme.radius", "greater than 1");
+    assert_error(
+        &rejected_json(|v| v["scheme"]["laplacian_radius"] = json!(-3.1)),
+        "scheme.laplacian_radius",
+        "greater than 1",
+    );
+}
+
+#[test]
+fn non_positive_solver_tolerance() {
+    let e = rejected_json(|v| v["scheme"]["solver_tolerance"] = json!(0.0));
+    assert_error(&e, "scheme.solver_tolerance", "positive");
+    let e = rejected_json(|v| v["scheme"]["solver_max_iterations"] = json!(0));
+    assert_error(&e, "scheme.solver_max_iterations", "positive");
+}
+
+#[test]
+fn scheme_ranges() {
+    assert_error(&rejected_json(|v| v["scheme"]["surface_threshold"] = json!(1.5)), "scheme.surface_threshold", "(0, 1]");
+    assert_error(
+        &rejected_json(|v| v["scheme"]["collision_restitution"] = json!(2.0)),
+        "scheme.collision_restitution",
+        "[0, 1]",
+    );
+    assert_error(&rejected_json(|v| v["scheme"]["compressibility"] = json!(-1e-9)), "scheme.compressibility", "negative");
+}
+
+#[test]
+fn domain_min_not_below_max() {
+    let e = rejected_json(|v| v["domain"]["min"] = json!([-0.5, 0.5]));
+    assert_error(&e, "domain", "in y");
+    let e = rejected_json(|v| v["domain"]["max"] = json!([-0.6, 0.5]));
+    assert_error(&e, "domain", "in x");
+}
+
+#[test]
+fn fluid_block_outside_the_domain() {
+    let e = rejected_json(|v| v["fluid_blocks"][0]["polygon"][2] = json!([0.6, 0.0]));
+    assert_error(&e, "fluid_blocks[0].polygon[2]", "outside the domain");
+}
+
+#[test]
+fn no_fluid_block() {
+    assert_error(&rejected_json(|v| v["fluid_blocks"] = json!([])), "fluid_blocks", "at least one");
+}
+
+#[test]
+fn polygon_with_fewer_than_three_vertices() {
+    let e = rejected_json(|v| v["bodies"][0]["polygon"] = json!([[0.0, 0.0], [0.05, 0.03]]));
+    assert_error(&e, "bodies[0].polygon", "at least 3");
+    let e = rejected_json(|v| v["fluid_blocks"][0]["polygon"] = json!([]));
+    assert_error(&e, "fluid_blocks[0].polygon", "at least 3");
+}
+
+#[test]
+fn polygon_with_zero_area() {
+    let e = rejected_json(|v| v["fluid_blocks"][0]["polygon"] = json!([[-0.3, -0.3], [0.0, -0.3], [0.3, -0.3]]));
+    assert_error(&e, "fluid_blocks[0].polygon", "zero area");
+}
+
+#[test]
+fn polygon_with_repeated_vertex() {
+    let e = rejected_json(|v| {
+        v["bodies"][1]["polygon"] = json!([[-0.02, -0.02], [0.02, -0.02], [0.02, -0.02], [0.02, 0.02], [-0.02, 0.02]])
+    });
+    assert_error(&e, "bodies[1].polygon[2]", "repeats");
+    // closing the polygon by repeating the first vertex gets a hint
+    let e = rejected_json(|v| {
+        v["bodies"][1]["polygon"] = json!([[-0.02, -0.02], [0.02, -0.02], [0.02, 0.02], [-0.02, 0.02], [-0.02, -0.02]])
+    });
+    assert_error(&e, "bodies[1].polygon[0]", "close themselves");
+}
+
+#[test]
+fn self_intersecting_polygon() {
+    // a bow tie: edges 0-1 and 2-3 cross
+    let e = rejected_json(|v| v["bodies"][1]["polygon"] = json!([[-0.02, -0.02], [0.02, 0.02], [0.02, -0.02], [-0.02, 0.02]]));
+    assert_error(&e, "bodies[1].polygon", "self-intersecting");
+    let e = rejected_json(|v| v["fluid_blocks"][0]["polygon"] = json!([[-0.3, -0.3], [0.3, 0.0], [0.3, -0.3], [-0.3, 0.0]]));
+    assert_error(&e, "fluid_blocks[0].polygon", "self-intersecting");
+}
+
+#[test]
+fn clockwise_body_polygon() {
+    let e = rejected_json(|v| {
+        let poly = v["bodies"][0]["polygon"].as_array_mut().unwrap();
+        poly.reverse();
+    });
+    assert_error(&e, "bodies[0].polygon", "counter-clockwise");
+}
+
+#[test]
+fn clockwise_fluid_block_is_allowed() {
+    let mut v = base_value();
+    v["fluid_blocks"][0]["polygon"].as_array_mut().unwrap().reverse();
+    validate(&parse_case_value(v).unwrap(), &Limits::default()).expect("fluid blocks may have either orientation");
+}
+
+#[test]
+fn polyline_with_fewer_than_two_points() {
+    let e = rejected_json(|v| v["walls"][0]["polyline"] = json!([[0.0, 0.0]]));
+    assert_error(&e, "walls[0].polyline", "at least 2");
+    let e = rejected_json(|v| {
+        v["walls"][0]["polyline"] = json!([[-0.3, -0.3], [0.3, -0.3]]);
+        v["walls"][0]["closed"] = json!(true);
+    });
+    assert_error(&e, "walls[0].polyline", "at least 3");
+}
+
+#[test]
+fn polyline_with_zero_length_segment() {
+    let e = rejected_json(|v| {
+        v["walls"][0]["polyline"] = json!([[-0.3, 0.3], [-0.3, -0.3], [-0.3, -0.3], [0.3, -0.3], [0.3, 0.3]])
+    });
+    assert_error(&e, "walls[0].polyline[2]", "zero-length");
+}
+
+#[test]
+fn body_overlapping_a_wall() {
+    // the wedge moved onto the right tank wall
+    let e = rejected_json(|v| v["bodies"][0]["position"] = json!([0.3, 0.1]));
+    assert_error(&e, "bodies[0]", "overlaps wall 'tank'");
+}
+
+#[test]
+fn body_overlap_accounts_for_the_angle() {
+    // a long thin plate clear of the wall when flat, crossing it when turned 90°
+    let plate = |v: &mut Value| {
+        v["bodies"][1]["polygon"] = json!([[-0.2, -0.01], [0.2, -0.01], [0.2, 0.01], [-0.2, 0.01]]);
+        v["bodies"][1]["position"] = json!([0.0, -0.2]);
+    };
+    let mut ok = base_value();
+    plate(&mut ok);
+    validate(&parse_case_value(ok).unwrap(), &Limits::default()).expect("the flat plate is clear");
+    let e = rejected_json(|v| {
+        plate(v);
+        v["bodies"][1]["angle"] = json!(std::f64::consts::FRAC_PI_2);
+    });
+    assert_error(&e, "bodies[1]", "overlaps wall");
+}
+
+#[test]
+fn bodies_overlapping_each_other() {
+    let e = rejected_json(|v| v["bodies"][1]["position"] = json!([0.05, 0.13]));
+    assert_error(&e, "bodies[1]", "overlaps body 'wedge'");
+}
+
+#[test]
+fn body_inside_another_body() {
+    // no edges cross: the box lies wholly inside the wedge
+    let e = rejected_json(|v| {
+        v["bodies"][1]["polygon"] = json!([[-0.005, -0.005], [0.005, -0.005], [0.005, 0.005], [-0.005, 0.005]]);
+        v["bodies"][1]["position"] = json!([0.0, 0.15]);
+    });
+    assert_error(&e, "bodies[1]", "overlaps body 'wedge'");
+}
+
+#[test]
+fn free_body_with_non_positive_mass_or_inertia() {
+    assert_error(&rejected_json(|v| v["bodies"][1]["motion"]["mass"] = json!(0.0)), "bodies[1].motion.mass", "positive");
+    assert_error(
+        &rejected_json(|v| v["bodies"][1]["motion"]["inertia"] = json!(-1.0)),
+        "bodies[1].motion.inertia",
+        "positive",
+    );
+}
+
+#[test]
+fn velocity_table_not_increasing() {
+    let e = rejected_json(|v| v["bodies"][0]["motion"]["table"][1]["time"] = json!(0.0));
+    assert_error(&e, "bodies[0].motion.table[1].time", "strictly increasing");
+    let e = rejected_json(|v| v["bodies"][0]["motion"]["table"] = json!([]));
+    assert_error(&e, "bodies[0].motion.table", "at least one");
+}
+
+#[test]
+fn particle_count_above_the_limit() {
+    // 0.6 m x 0.3 m at l0 = 0.01: 1800 particles
+    let case = base_case();
+    let e = validate(&case, &Limits { max_particles: 1000 }).expect_err("above the limit");
+    assert_error(&e, "particle_spacing", "estimated from the fluid block areas");
+    assert!(e.message.contains("1800") && e.message.contains("1000"), "{e:?}");
+    validate(&case, &Limits { max_particles: 1800 }).expect("at the limit");
+}
+
+#[test]
+fn non_positive_output_intervals() {
+    assert_error(&rejected_json(|v| v["output"]["load_interval"] = json!(0.0)), "output.load_interval", "positive");
+    assert_error(
+        &rejected_json(|v| v["output"]["snapshot_interval"] = json!(-1.0)),
+        "output.snapshot_interval",
+        "positive",
+    );
+    assert_error(&rejected_json(|v| v["output"]["filter_window"] = json!(0.0)), "output.filter_window", "positive");
+}
+
+#[test]
+fn null_output_intervals_are_allowed() {
+    let mut v = base_value();
+    v["output"]["load_interval"] = Value::Null;
+    v["output"]["snapshot_interval"] = Value::Null;
+    validate(&parse_case_value(v).unwrap(), &Limits::default()).expect("null intervals are valid");
+}
+
+#[test]
+fn probe_outside_the_domain() {
+    let e = rejected_json(|v| v["output"]["probes"][1]["position"] = json!([0.1, -0.7]));
+    assert_error(&e, "output.probes[1].position", "outside the domain");
+}
+
+#[test]
+fn duplicate_names() {
+    let e = rejected_json(|v| v["bodies"][1]["name"] = json!("wedge"));
+    assert_error(&e, "bodies[1].name", "duplicate");
+    // a body may not take a wall's name either: both label rows of loads.csv
+    let e = rejected_json(|v| v["bodies"][0]["name"] = json!("tank"));
+    assert_error(&e, "bodies[0].name", "duplicate name 'tank'");
+    let e = rejected_json(|v| v["output"]["probes"][1]["name"] = json!("p1"));
+    assert_error(&e, "output.probes[1].name", "duplicate");
+}
+
+#[test]
+fn empty_or_csv_breaking_names() {
+    assert_error(&rejected_json(|v| v["walls"][0]["name"] = json!(" ")), "walls[0].name", "empty");
+    assert_error(&rejected_json(|v| v["bodies"][0]["name"] = json!("a,b")), "bodies[0].name", "commas");
+}
+
+#[test]
+fn unknown_scheme_name_lists_the_valid_ones() {
+    let mut v = base_value();
+    v["scheme"]["laplacian"] = json!("higher_ordr");
+    let e = parse_case_value(v).expect_err("unknown variant");
+    assert_error(&e, "scheme.laplacian", "higher_order");
+    assert!(e.message.contains("higher_ordr") && e.message.contains("classic"), "{e:?}");
+}
+
+#[test]
+fn unknown_field_is_rejected_with_its_path() {
+    let mut v = base_value();
+    v["fluid"]["densty"] = json!(1000.0);
+    let e = parse_case_value(v).expect_err("unknown field");
+    assert!(e.path.starts_with("fluid"), "{e:?}");
+    assert!(e.message.contains("densty"), "{e:?}");
+}
+
+#[test]
+fn wrong_type_names_its_path() {
+    let mut v = base_value();
+    v["bodies"][1]["motion"]["mass"] = json!("heavy");
+    let e = parse_case_value(v).expect_err("a string mass");
+    assert!(e.path.starts_with("bodies[1].motion"), "{e:?}");
+}
+
+#[test]
+fn negative_stabiliser_settings() {
+    let e = rejected_json(|v| v["scheme"]["gradient_stabilization"] = json!(-0.5));
+    assert_error(&e, "scheme.gradient_stabilization", "negative");
+    let e = rejected_json(|v| v["scheme"]["stabilization_distance"] = json!(-1.0));
+    assert_error(&e, "scheme.stabilization_distance", "negative");
+}
+
+/// Every number of a JSON value, by its pointer.
+fn number_pointers(v: &Value, here: String, out: &mut Vec<String>) {
+    match v {
+        Value::Number(_) => out.push(here),
+        Value::Array(items) => items.iter().enumerate().for_each(|(i, x)| number_pointers(x, format!("{here}/{i}"), out)),
+        Value::Object(map) => map.iter().for_each(|(k, x)| number_pointers(x, format!("{here}/{k}"), out)),
+        _ => {}
+    }
+}
+
+#[test]
+fn random_bad_numbers_are_rejected_or_built_without_panics() {
+    use rand::{Rng, SeedableRng};
+    let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(20261122);
+    let mut pointers = Vec::new();
+    number_pointers(&base_value(), String::new(), &mut pointers);
+    let nasty = [0.0, -1.0, 1.0e300, -1.0e300, 1.0e-300, 0.5, 2.0, 1.0e6];
+    let limits = Limits { max_particles: 20_000 };
+    let (mut accepted, mut rejected_count) = (0, 0);
+    for _ in 0..400 {
+        let mut v = base_value();
+        for _ in 0..rng.random_range(1..4) {
+            let p = &pointers[rng.random_range(0..pointers.len())];
+            *v.pointer_mut(p).unwrap() = json!(nasty[rng.random_range(0..nasty.len())]);
+        }
+        let Ok(case) = parse_case_value(v) else { continue };
+        match validate(&case, &limits) {
+            Ok(()) => {
+                accepted += 1;
+                let params = mpsfsi::engine::params::MpsParameters::new(&case);
+                let scene = mpsfsi::engine::scene::build_scene(&case, &params);
+                assert!(scene.particles.len() <= limits.max_particles, "the estimate bounds the scene");
+            }
+            Err(e) => {
+                rejected_count += 1;
+                assert!(!e.message.is_empty(), "{e:?}");
+            }
+        }
+    }
+    assert!(accepted > 0 && rejected_count > 0, "accepted {accepted}, rejected {rejected_count}");
+}
+
+#[test]
+fn design_example_case_is_valid() {
+    // the case of DESIGN.md §2.2: a prescribed wedge over a tank
+    let v = json!({
+      "name": "wedge-30deg-constant-velocity",
+      "fluid": { "density": 1000.0, "kinematic_viscosity": 1.0e-6, "gravity": [0.0, -9.81] },
+      "particle_spacing": 0.005,
+      "domain": { "min": [-1.0, -1.0], "max": [1.0, 0.6] },
+      "fluid_blocks": [ { "polygon": [[-0.8, -0.6], [0.8, -0.6], [0.8, 0.0], [-0.8, 0.0]] } ],
+      "walls": [ { "name": "tank", "polyline": [[-0.8, 0.3], [-0.8, -0.6], [0.8, -0.6], [0.8, 0.3]] } ],
+      "bodies": [ {
+          "name": "wedge",
+          "polygon": [[0.0, 0.0], [0.25, 0.1443], [0.25, 0.3], [-0.25, 0.3], [-0.25, 0.1443]],
+          "position": [0.0, 0.0],
+          "angle": 0.0,
+          "motion": { "type": "prescribed", "velocity": [0.0, -6.15], "angular_velocity": 0.0 }
+      } ],
+      "time": { "end": 0.02, "cfl": 0.2, "max_dt": 1.0e-4 },
+      "output": { "load_interval": 1.0e-5, "snapshot_interval": null, "probes": [ { "name": "p1", "position": [0.0, -0.3] } ] },
+      "scheme": { }
+    });
+    validate(&parse_case_value(v).unwrap(), &Limits::default()).expect("the DESIGN.md example is valid");
+}

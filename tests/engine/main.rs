@@ -1,0 +1,8 @@
+//! Engine suite: kernels, lattice operators, neighbour search, the polygon-wall
+//! lattice sums, and determinism. Each test compares with an exact value.
+
+mod determinism;
+mod kernels;
+mod lattice;
+mod neighbors;
+mod walls;
