@@ -414,7 +414,7 @@ pub fn run_one(bench: &BenchCase, variant: &Variant, spacing: Real, runs_dir: &P
             result.error_measure = m1;
             result.error2 = e2;
             result.error2_measure = m2;
-            result.note = format!("{reason}{note}");
+            result.note = format!("{reason}{note}").trim_end_matches("; ").to_string();
         }
         Err(e) => result.note = format!("{reason}cannot measure: {e}"),
     }
