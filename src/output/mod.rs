@@ -5,8 +5,11 @@
 //! that ends at t (impulse / interval), so the integral of the sampled force equals
 //! the impulse the fluid actually transmitted, whatever the step size.
 
+pub mod filter;
+pub mod plot;
 pub mod probes;
 pub mod snapshots;
+pub mod vtk;
 
 use crate::engine::math::Real;
 use crate::engine::Simulation;

@@ -1,19 +1,92 @@
-//! VTK snapshots (.vtu per snapshot + .pvd index). PLACEHOLDER: writes nothing yet.
+//! VTK snapshots of the particles: `snapshots/step_NNNNNN.vtu` (NNNNNN the step
+//! number) every `snapshot_interval` of simulated time, the first at t = 0, and
+//! `snapshots/run.pvd`, the ParaView collection indexing them by time.
+//!
+//! The collection is rewritten (to a temporary file, then renamed over the old one)
+//! after every snapshot, so a running or failed job always leaves a valid `run.pvd`
+//! naming only complete `.vtu` files.
 
+use super::vtk::{pvd_string, vtu_string, PvdEntry, VtuFields};
+use crate::engine::math::Real;
 use crate::engine::Simulation;
-use std::path::Path;
+use std::path::{Path, PathBuf};
 
-pub struct SnapshotWriter;
+/// Folder of the snapshots inside the run directory.
+pub const SNAPSHOT_DIR: &str = "snapshots";
+/// Name of the collection file.
+pub const PVD_NAME: &str = "run.pvd";
+
+pub struct SnapshotWriter {
+    dir: PathBuf,
+    interval: Real,
+    next_time: Real,
+    entries: Vec<PvdEntry>,
+}
+
+/// File name of the snapshot of step `step`.
+pub fn snapshot_file_name(step: u64) -> String {
+    format!("step_{step:06}.vtu")
+}
+
+/// Write `contents` to `path` through a temporary file and a rename, so readers never
+/// see a half-written file.
+fn write_atomically(path: &Path, contents: &str) -> std::io::Result<()> {
+    let tmp = path.with_extension("tmp");
+    std::fs::write(&tmp, contents)?;
+    std::fs::rename(&tmp, path)
+}
 
 impl SnapshotWriter {
-    /// None when no snapshot interval is set: no writer exists.
-    pub fn create(_dir: &Path, interval: Option<f64>) -> std::io::Result<Option<Self>> {
-        Ok(interval.filter(|i| *i > 0.0).map(|_| Self))
+    /// None when no snapshot interval is set: no writer exists. Creates
+    /// `dir/snapshots/` with an empty (valid) collection.
+    pub fn create(dir: &Path, interval: Option<f64>) -> std::io::Result<Option<Self>> {
+        let Some(interval) = interval.filter(|i| *i > 0.0 && i.is_finite()) else { return Ok(None) };
+        let dir = dir.join(SNAPSHOT_DIR);
+        std::fs::create_dir_all(&dir)?;
+        let writer = Self { dir, interval, next_time: 0.0, entries: Vec::new() };
+        writer.write_collection()?;
+        Ok(Some(writer))
     }
-    pub fn record(&mut self, _sim: &Simulation) -> std::io::Result<()> {
+
+    /// Write a snapshot if the simulation has reached the next snapshot time.
+    pub fn record(&mut self, sim: &Simulation) -> std::io::Result<()> {
+        if sim.time < self.next_time - 1e-9 * self.interval {
+            return Ok(());
+        }
+        // the same step twice (e.g. a final record after the loop) writes nothing new
+        if self.entries.last().is_some_and(|e| e.time == sim.time) {
+            return Ok(());
+        }
+        let p = &sim.particles;
+        let fields = VtuFields {
+            position: &p.position,
+            velocity: &p.velocity,
+            pressure: &p.pressure,
+            number_density: &p.number_density,
+            n0: Some(sim.params.n0),
+            free_surface: &p.free_surface,
+        };
+        let file = snapshot_file_name(sim.steps);
+        write_atomically(&self.dir.join(&file), &vtu_string(&fields, sim.time))?;
+        self.entries.push(PvdEntry { time: sim.time, file });
+        self.write_collection()?;
+        while self.next_time <= sim.time + 1e-9 * self.interval {
+            self.next_time += self.interval;
+        }
         Ok(())
     }
+
+    /// The collection is complete after every `record`; nothing is pending.
     pub fn finish(&mut self) -> std::io::Result<()> {
-        Ok(())
+        self.write_collection()
+    }
+
+    /// Snapshots written so far (time, file relative to `snapshots/`).
+    pub fn entries(&self) -> &[PvdEntry] {
+        &self.entries
+    }
+
+    fn write_collection(&self) -> std::io::Result<()> {
+        write_atomically(&self.dir.join(PVD_NAME), &pvd_string(&self.entries))
     }
 }

@@ -1,0 +1,133 @@
+//! The error measures of the benchmark, as pure functions of the run's outputs so that
+//! each can be tested on synthetic data.
+
+use super::reference::{MARTIN_MOYCE_SURGE, SURGE_COMPARISON_RANGE};
+use crate::engine::math::Real;
+
+/// Time-weighted mean of a series of interval means (`times[k]` ends the interval of
+/// `values[k]`, the first starting at `start`) over the intervals ending after `from`.
+/// None when no interval qualifies.
+pub fn interval_mean_after(start: Real, times: &[Real], values: &[Real], from: Real) -> Option<Real> {
+    let (mut sum, mut span) = (0.0, 0.0);
+    let mut previous = start;
+    for (t, v) in times.iter().zip(values) {
+        if previous >= from {
+            sum += v * (t - previous);
+            span += t - previous;
+        }
+        previous = *t;
+    }
+    (span > 0.0).then(|| sum / span)
+}
+
+/// Mean and standard deviation of point samples taken at or after `from`.
+pub fn sample_stats_after(times: &[Real], values: &[Real], from: Real) -> Option<(Real, Real)> {
+    let picked: Vec<Real> = times.iter().zip(values).filter(|(t, _)| **t >= from).map(|(_, v)| *v).collect();
+    if picked.is_empty() {
+        return None;
+    }
+    let n = picked.len() as Real;
+    let mean = picked.iter().sum::<Real>() / n;
+    let var = picked.iter().map(|v| (v - mean).powi(2)).sum::<Real>() / n;
+    Some((mean, var.sqrt()))
+}
+
+/// |measured - expected| / |expected|.
+pub fn relative_error(measured: Real, expected: Real) -> Real {
+    (measured - expected).abs() / expected.abs()
+}
+
+/// The surge front of a dam break: the largest x of the particles within `band` of the
+/// floor (y - floor < band) that have another such particle within `2 l0` (a lone
+/// droplet ahead of the front does not count), plus l0/2 (a particle stands for a cell
+/// of width l0). None when no particle is near the floor.
+pub fn surge_front(points: &[(Real, Real)], floor: Real, band: Real, l0: Real) -> Option<Real> {
+    let mut near: Vec<(Real, Real)> = points.iter().copied().filter(|(_, y)| *y - floor < band).collect();
+    near.sort_by(|a, b| b.0.total_cmp(&a.0));
+    let reach2 = (2.0 * l0).powi(2);
+    for (i, p) in near.iter().enumerate() {
+        // candidates are sorted by x descending: a companion lies within 2 l0 in x
+        let companion = near[i + 1..]
+            .iter()
+            .take_while(|q| p.0 - q.0 <= 2.0 * l0)
+            .chain(near[..i].iter().rev().take_while(|q| q.0 - p.0 <= 2.0 * l0))
+            .any(|q| (q.0 - p.0).powi(2) + (q.1 - p.1).powi(2) <= reach2);
+        if companion {
+            return Some(p.0 + 0.5 * l0);
+        }
+    }
+    None
+}
+
+/// Linear interpolation of a series sorted by its first coordinate; None outside it.
+pub fn interpolate(series: &[(Real, Real)], x: Real) -> Option<Real> {
+    let k = series.partition_point(|p| p.0 < x);
+    if k < series.len() && series[k].0 == x {
+        return Some(series[k].1);
+    }
+    if k == 0 || k == series.len() {
+        return None;
+    }
+    let (a, b) = (series[k - 1], series[k]);
+    Some(a.1 + (b.1 - a.1) * (x - a.0) / (b.0 - a.0))
+}
+
+/// RMS relative error of a simulated surge front (T, Z) against Martin & Moyce for the
+/// reference points with T in [`SURGE_COMPARISON_RANGE`], the simulated front
+/// interpolated linearly at the reference T. None when the simulation does not cover
+/// every such point.
+pub fn surge_front_rms_error(front: &[(Real, Real)]) -> Option<Real> {
+    let mut sorted = front.to_vec();
+    sorted.sort_by(|a, b| a.0.total_cmp(&b.0));
+    let (lo, hi) = SURGE_COMPARISON_RANGE;
+    let mut sum = 0.0;
+    let mut count = 0;
+    for &(t, z) in MARTIN_MOYCE_SURGE.iter().filter(|(t, _)| *t >= lo && *t <= hi) {
+        let simulated = interpolate(&sorted, t)?;
+        sum += ((simulated - z) / z).powi(2);
+        count += 1;
+    }
+    (count > 0).then(|| (sum / count as Real).sqrt())
+}
+
+/// Least-squares line y = a + b x; None with fewer than two distinct x.
+pub fn fit_line(points: &[(Real, Real)]) -> Option<(Real, Real)> {
+    let n = points.len() as Real;
+    if points.len() < 2 {
+        return None;
+    }
+    let mx = points.iter().map(|p| p.0).sum::<Real>() / n;
+    let my = points.iter().map(|p| p.1).sum::<Real>() / n;
+    let sxx: Real = points.iter().map(|p| (p.0 - mx).powi(2)).sum();
+    let sxy: Real = points.iter().map(|p| (p.0 - mx) * (p.1 - my)).sum();
+    (sxx > 0.0).then(|| {
+        let b = sxy / sxx;
+        (my - b * mx, b)
+    })
+}
+
+/// The force coefficient of a constant-velocity entry: fit F = C rho V³ (t - t0) to the
+/// interval-mean force samples (`times[k]` ends the interval of `force[k]`, the first
+/// starting at `start`) whose interval midpoints lie in `window` (for a linear force the
+/// interval mean is the value at the midpoint). Returns (C, t0).
+pub fn fit_force_coefficient(
+    start: Real,
+    times: &[Real],
+    force: &[Real],
+    window: (Real, Real),
+    density: Real,
+    speed: Real,
+) -> Option<(Real, Real)> {
+    let mut previous = start;
+    let mut points = Vec::new();
+    for (t, f) in times.iter().zip(force) {
+        let mid = 0.5 * (previous + t);
+        if mid >= window.0 && mid <= window.1 {
+            points.push((mid, *f));
+        }
+        previous = *t;
+    }
+    let (a, b) = fit_line(&points)?;
+    let c = b / (density * speed.powi(3));
+    (b != 0.0).then(|| (c, -a / b))
+}
