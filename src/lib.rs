@@ -8,3 +8,4 @@ pub mod engine;
 pub mod coupling;
 pub mod output;
 pub mod run;
+pub mod service;
