@@ -115,14 +115,17 @@ async fn submit_job(State(state): State<AppState>, body: Result<Bytes, BytesReje
             ApiError::BadRequest(rejection.body_text())
         }
     })?;
-    let value: Value = if body.iter().all(u8::is_ascii_whitespace) {
+    // The job runs from the text as submitted, so it parses exactly as `mpsfsi run` would
+    // parse the same file.
+    let case_text: String = if body.iter().all(u8::is_ascii_whitespace) {
         match super::DEFAULT_CASE {
-            Some(text) => serde_json::from_str(text).map_err(ApiError::internal)?,
+            Some(text) => text.to_string(),
             None => return Err(ApiError::MalformedJson("the body is empty (no default case is built in)".into())),
         }
     } else {
-        serde_json::from_slice(&body).map_err(|e| ApiError::MalformedJson(e.to_string()))?
+        String::from_utf8(body.to_vec()).map_err(|e| ApiError::MalformedJson(e.to_string()))?
     };
+    let value: Value = serde_json::from_str(&case_text).map_err(|e| ApiError::MalformedJson(e.to_string()))?;
     let case = parse_case_value(value).map_err(ApiError::InvalidCase)?;
     validate(&case, &Limits { max_particles: config.max_particles }).map_err(ApiError::InvalidCase)?;
     if state.jobs.is_stopping() {
@@ -130,11 +133,10 @@ async fn submit_job(State(state): State<AppState>, body: Result<Bytes, BytesReje
     }
 
     let id = Uuid::new_v4();
-    let case_json = serde_json::to_string_pretty(&case).map_err(ApiError::internal)?;
     let dir = config.job_dir(&id);
     tokio::fs::create_dir_all(&dir).await?;
-    tokio::fs::write(dir.join("case.json"), format!("{case_json}\n")).await?;
-    let admission = state.jobs.store.submit(id, &case.name, &case_json, case.time.end, config.queue_capacity).await;
+    tokio::fs::write(dir.join("case.json"), &case_text).await?;
+    let admission = state.jobs.store.submit(id, &case.name, &case_text, case.time.end, config.queue_capacity).await;
     match admission {
         Ok(Admission::Accepted(row)) => {
             state.jobs.job_queued();
