@@ -63,6 +63,15 @@ pub enum LaplacianKind {
     LeastSquares,
 }
 
+impl LaplacianKind {
+    /// Whether the pressure matrix of this Laplacian is symmetric (so CG applies).
+    /// CHL, the anisotropic and the least-squares operators build each row from the
+    /// particle's own corrective or moment matrix: non-symmetric.
+    pub fn is_symmetric(self) -> bool {
+        !matches!(self, LaplacianKind::CorrectedHigherOrder | LaplacianKind::Anisotropic | LaplacianKind::LeastSquares)
+    }
+}
+
 /// Source term of the pressure Poisson equation.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize, JsonSchema, Default)]
 #[serde(rename_all = "snake_case")]
@@ -125,6 +134,11 @@ pub struct Scheme {
     /// Free surface only if the neighbour distribution is also one-sided: |sum w r_ij| / sum w > this * l0.
     /// Zero disables the check.
     pub surface_asymmetry: f64,
+    /// Weight of the minimum-pressure repulsion (p_i - p̂_i) Σ r w / r² added to the
+    /// corrected gradient: 0 is pure GC, 1 makes it the classic gradient's stabilising part.
+    pub gradient_stabilization: f64,
+    /// Pairs closer than this (ratio of l0) feel the stabilising repulsion.
+    pub stabilization_distance: f64,
     /// Clip negative pressures to zero after the solve.
     pub clip_negative_pressure: bool,
     /// Free-surface particles take the pressure of a surface half a spacing beyond them
@@ -159,6 +173,8 @@ impl Default for Scheme {
             laplacian_radius: None,
             surface_threshold: 0.97,
             surface_asymmetry: 0.2,
+            gradient_stabilization: 1.0,
+            stabilization_distance: 0.9,
             clip_negative_pressure: true,
             surface_offset: true,
             mixed_relaxation: 0.01,
@@ -182,6 +198,16 @@ impl Scheme {
             compressibility: 0.45e-9,
             ..Self::default()
         }
+    }
+
+    /// The scheme as run: a non-symmetric Laplacian with a conjugate-gradient solver is
+    /// solved with BiCGSTAB instead (CG needs a symmetric matrix); the run summary
+    /// reports this resolved scheme.
+    pub fn resolved(mut self) -> Self {
+        if !self.laplacian.is_symmetric() && matches!(self.solver, SolverKind::PcgJacobi | SolverKind::PcgIc0) {
+            self.solver = SolverKind::Bicgstab;
+        }
+        self
     }
 
     /// r_e/l0 of the Laplacian actually used.

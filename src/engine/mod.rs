@@ -4,6 +4,7 @@
 pub mod kernel;
 pub mod math;
 pub mod neighbors;
+pub mod operators;
 pub mod params;
 pub mod particles;
 pub mod pressure;

@@ -68,7 +68,8 @@ impl MpsParameters {
             let wl: Real = offsets.iter().map(|o| K::w(r_of(o), re_lap)).sum();
             let wl_r2: Real = offsets.iter().map(|o| K::w(r_of(o), re_lap) * r_of(o).powi(2)).sum();
             let lap_kernel_r2: Real = match scheme.laplacian {
-                LaplacianKind::Classic => wl_r2,
+                // Imoto's second-order Laplacian is the classic one (paper 000 Theorem 3.1)
+                LaplacianKind::Classic | LaplacianKind::SecondOrder => wl_r2,
                 _ => offsets.iter().map(|o| K::hl(r_of(o), re_lap) * r_of(o).powi(2)).sum(),
             };
             let div: Real = offsets.iter().map(|o| K::dw(r_of(o), re) * r_of(o)).sum();

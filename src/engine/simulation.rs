@@ -114,7 +114,7 @@ impl Simulation {
         let n_walls = walls.len();
         let mut sim = Self {
             params,
-            scheme: case.scheme.clone(),
+            scheme: case.scheme.clone().resolved(),
             particles,
             walls,
             time: 0.0,

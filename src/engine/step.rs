@@ -21,6 +21,7 @@
 use super::kernel::Kernel;
 use super::math::{vec2, Mat2, Real, Vec2};
 use super::neighbors::NeighborList;
+use super::operators::{gradient_row, laplacian_row, Cloud, LatticeConstants, Normalisation};
 use super::pressure::{self, CsrMatrix, SolveParams};
 use super::simulation::{SimError, Simulation, StepInfo, WallLoad};
 use super::walls::{moment_about, PlacedWall, WallContacts, WallKernels, WallWeights};
@@ -61,7 +62,8 @@ impl<K: Kernel> KernelWeights<K> {
         Self {
             re: sim.params.re,
             re_lap: sim.params.re_lap,
-            classic_laplacian: sim.scheme.laplacian == LaplacianKind::Classic,
+            // Imoto's second-order Laplacian is the classic one (paper 000 Theorem 3.1)
+            classic_laplacian: matches!(sim.scheme.laplacian, LaplacianKind::Classic | LaplacianKind::SecondOrder),
             _k: PhantomData,
         }
     }
@@ -285,6 +287,9 @@ fn detect_free_surface<K: Kernel>(sim: &mut Simulation) {
     let n_star = &sim.scratch.n_star;
     let grad_prev = &sim.scratch.gradient;
     let offset = sim.scheme.surface_offset;
+    // capped at twice the value at rest: the correction removes the O(l0/H) bias of calm
+    // water; in violent flow an uncapped gradient feeds back into itself
+    let cap = sim.params.density * vec2(sim.params.gravity).norm() * l0;
     // (is surface, Dirichlet value): the surface lies half a spacing beyond the particle,
     // so its pressure is the previous step's gradient times l0/2 along the outward normal
     // (rho g l0 / 2 at rest).
@@ -313,7 +318,7 @@ fn detect_free_surface<K: Kernel>(sim: &mut Simulation) {
                 return (false, 0.0);
             }
             let value = match (offset, grad_prev.get(i)) {
-                (true, Some(g)) if m.norm() > 0.0 => (g.dot(&(m / m.norm())) * 0.5 * l0).max(0.0),
+                (true, Some(g)) if m.norm() > 0.0 => (g.dot(&(m / m.norm())) * 0.5 * l0).clamp(0.0, cap),
                 _ => 0.0,
             };
             (true, value)
@@ -393,6 +398,13 @@ fn assemble_pressure_equation<K: Kernel>(sim: &mut Simulation, weights: &KernelW
     };
     let compress = rho * sim.scheme.compressibility / (dt * dt);
     let contacts = &sim.contacts;
+    // CHL, anisotropic and least-squares rows come from engine::operators for particles
+    // away from walls; rows with wall contacts keep the tabulated (HL/classic) form,
+    // which carries the Neumann condition, with the same lattice normalisation.
+    let kind = sim.scheme.laplacian;
+    let operator_rows = !kind.is_symmetric();
+    let cloud = Cloud::new(x, nb, p.re_lap);
+    let lattice = Normalisation::Reference(LatticeConstants::compute::<K>(p.l0, p.re_lap, 2));
     let neumann = &sim.scratch.neumann;
     let nu = particle_of.len();
     let rows: Vec<(Vec<u32>, Vec<Real>, Real)> = (0..nu)
@@ -403,6 +415,21 @@ fn assemble_pressure_equation<K: Kernel>(sim: &mut Simulation, weights: &KernelW
             let mut vals = Vec::with_capacity(32);
             let mut diag = compress;
             let mut b = -source_of(i);
+            if operator_rows && contacts.of(i).is_empty() {
+                for (j, c) in laplacian_row::<K>(kind, &cloud, lattice, i).off_diagonal {
+                    diag += c;
+                    let uj = unknown_of[j];
+                    if uj != u32::MAX {
+                        cols.push(uj);
+                        vals.push(-c);
+                    } else {
+                        b += c * dirichlet[j];
+                    }
+                }
+                cols.push(row as u32);
+                vals.push(diag);
+                return (cols, vals, b);
+            }
             for &j in nb.of(i) {
                 let l = c_lap * weights.laplacian((x[j as usize] - x[i]).norm());
                 if l == 0.0 {
@@ -474,15 +501,27 @@ fn correct_velocity_and_position<K: Kernel>(sim: &mut Simulation, walls: &[Place
         })
         .collect();
     let form = sim.scheme.gradient;
+    let kappa = sim.scheme.gradient_stabilization;
+    let close = sim.scheme.stabilization_distance * sim.params.l0;
     let contacts = &sim.contacts;
     let neumann = &sim.scratch.neumann;
+    // Anisotropic and least-squares gradients (engine::operators, paper 000 eq. 28 and
+    // LSMPS) away from walls, in the linear form Σ g_ij (p_j - p_i) like GC; particles
+    // with wall contacts use GC, whose moment matrix includes the virtual wall points.
+    let operator_gradient = matches!(form, GradientKind::Anisotropic | GradientKind::LeastSquares);
+    let cloud = Cloud::new(x, nb, re);
+    let lattice = Normalisation::Reference(LatticeConstants::compute::<K>(prm.l0, re, 2));
     // The gradient that moves the particles (fluid neighbours + virtual wall points).
     let total: Vec<Vec2> = (0..n)
         .into_par_iter()
         .map(|i| {
             let wall_contacts = contacts.of(i);
+            if operator_gradient && wall_contacts.is_empty() {
+                return gradient_row::<K>(form, &cloud, lattice, i).iter().map(|&(j, g)| g * (p[j] - p[i])).sum();
+            }
             let base = contacts.offsets[i] as usize;
             let (mut s_fluid, mut s_min, mut s_sym) = (Vec2::zeros(), Vec2::zeros(), Vec2::zeros());
+            let mut s_close = Vec2::zeros();
             let mut moment = Mat2::zeros();
             for &j in nb.of(i) {
                 let j = j as usize;
@@ -495,6 +534,9 @@ fn correct_velocity_and_position<K: Kernel>(sim: &mut Simulation, walls: &[Place
                 let w = K::w(d, re) / d2;
                 s_fluid += r * ((p[j] - p[i]) * w);
                 s_min += r * ((p[j] - p_min[i]) * w);
+                if d < close {
+                    s_close += r * w;
+                }
                 s_sym += match form {
                     GradientKind::Cmps => r * ((p[i] + p[j] - p_min[i] - p_min[j]) * w),
                     _ => r * ((p[i] + p[j]) * w),
@@ -520,8 +562,12 @@ fn correct_velocity_and_position<K: Kernel>(sim: &mut Simulation, walls: &[Place
                     let mm = moment / n0;
                     let det = mm.determinant();
                     let lattice_det = (1.0 / crate::engine::params::DIM).powi(2);
+                    // plus the repulsive part of the minimum-pressure form, (p_i - p̂_i) Σ r w / r²,
+                    // over pairs closer than `stabilization_distance`: silent on the lattice (still
+                    // water stays still), pushing particles apart where they cluster
+                    let stabilizer = s_close * ((p[i] - p_min[i]) * kappa * c_grad);
                     match mm.try_inverse() {
-                        Some(c) if det > 0.3 * lattice_det => c * (s_fluid + wall_linear) / n0,
+                        Some(c) if det > 0.3 * lattice_det => c * (s_fluid + wall_linear) / n0 + stabilizer,
                         _ => classic,
                     }
                 }

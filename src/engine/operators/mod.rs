@@ -1,0 +1,89 @@
+//! The MPS operator family as pure functions over a particle cloud: positions, the
+//! neighbour list, the influence radius r_e and the dimension d. Each operator returns
+//! one value per particle (computed in parallel, written by index: deterministic).
+//!
+//! Symbols (used in every submodule): r_ij = x_j - x_i, r = |r_ij|, f_ij = f_j - f_i,
+//! w = w(r) the weight of [`Kernel`](super::kernel::Kernel), n_i = Σ_j w (the particle
+//! number density), n0 its value in the full reference lattice, λ the classic
+//! Laplacian's Σ w r² / Σ w.
+//!
+//! Every Laplacian here is linear with the form ⟨∇²f⟩_i = Σ_j c_ij f_ij, so each
+//! variant is defined once by its row coefficients ([`laplacian_row`]), from which
+//! both the value ([`laplacian`]) and the pressure-equation row follow. Likewise every
+//! linear gradient is ⟨∇f⟩_i = Σ_j g_ij f_ij with vector coefficients
+//! ([`gradient_row`]); the divergence matching a gradient is Σ_j g_ij · u_ij.
+//!
+//! Which formula each variant is, with the paper and equation, is in the doc comment of
+//! the submodule that defines it.
+
+mod divergence;
+mod gradient;
+mod laplacian;
+mod moments;
+mod second_derivatives;
+
+pub use divergence::divergence;
+pub use gradient::{gradient, gradient_row, GradientRow, CORRECTED_GRADIENT_MIN_RCOND};
+pub use laplacian::{laplacian, laplacian_row, LaplacianRow};
+pub use moments::LatticeConstants;
+pub use second_derivatives::{anisotropic_second_derivatives, second_derivatives, SecondDerivatives};
+
+use super::math::{Real, Vec2};
+use super::neighbors::NeighborList;
+
+/// The particle cloud an operator acts on. The neighbour list may have been built with a
+/// radius larger than `re`: every weight vanishes at and beyond `re`.
+#[derive(Debug, Clone, Copy)]
+pub struct Cloud<'a> {
+    pub positions: &'a [Vec2],
+    pub neighbors: &'a NeighborList,
+    /// Influence radius r_e of the operator.
+    pub re: Real,
+    /// Dimension d: 2 for the engine, 1 for the one-dimensional paper tests (points on
+    /// the x axis).
+    pub dim: Real,
+}
+
+impl<'a> Cloud<'a> {
+    pub fn new(positions: &'a [Vec2], neighbors: &'a NeighborList, re: Real) -> Self {
+        Self { positions, neighbors, re, dim: 2.0 }
+    }
+
+    pub fn one_dimensional(positions: &'a [Vec2], neighbors: &'a NeighborList, re: Real) -> Self {
+        Self { positions, neighbors, re, dim: 1.0 }
+    }
+
+    pub fn len(&self) -> usize {
+        self.positions.len()
+    }
+
+    pub fn is_empty(&self) -> bool {
+        self.positions.is_empty()
+    }
+
+    /// (j, r_ij, r) for the neighbours of i strictly inside r_e, in list order.
+    #[inline]
+    pub(crate) fn pairs(&self, i: usize) -> impl Iterator<Item = (usize, Vec2, Real)> + '_ {
+        let xi = self.positions[i];
+        let re = self.re;
+        self.neighbors.of(i).iter().filter_map(move |&j| {
+            let j = j as usize;
+            let r = self.positions[j] - xi;
+            let d = r.norm();
+            (d > 0.0 && d < re).then_some((j, r, d))
+        })
+    }
+}
+
+/// How the number density and λ in the classic formulas are taken.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum Normalisation {
+    /// Per particle: n_i and λ_i of the particle's own neighbourhood, as in paper 000
+    /// §3.1 ("non-fixed values"); the HL/CHL coefficients likewise from the particle's own
+    /// Σ L(r) r² (exact for |x|² wherever the sum is not degenerate).
+    Local,
+    /// Fixed constants of the full reference lattice of spacing l0 (the classic choice:
+    /// n0 and λ of Koshizuka & Oka 1996, and the HL/CHL coefficients that make the
+    /// Laplacian of |x|² equal 2d on the lattice, as lambda does for the classic one).
+    Reference(LatticeConstants),
+}

@@ -1,0 +1,10 @@
+//! Verification of the operator family against the papers in shared/papers (issue 5).
+//! Each module reproduces one paper's test and asserts the paper's stated behaviour.
+
+mod convergence;
+mod diffusion;
+mod engine_variants;
+mod dirichlet_1d;
+mod manufactured_ppe;
+mod rows;
+mod spacing_1d;
