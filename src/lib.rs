@@ -9,3 +9,4 @@ pub mod coupling;
 pub mod engine;
 pub mod output;
 pub mod run;
+pub mod service;

@@ -1,0 +1,105 @@
+//! The one error type of the HTTP layer. Every error answers
+//! `{ "error": { "code", "message", "path" } }`; internal failures are logged with their
+//! cause and answered with a generic message.
+
+use crate::case::CaseError;
+use axum::http::{header, HeaderValue, StatusCode};
+use axum::response::{IntoResponse, Response};
+use axum::Json;
+
+#[derive(Debug, thiserror::Error)]
+pub enum ApiError {
+    #[error("the body is not valid JSON: {0}")]
+    MalformedJson(String),
+    #[error("{}", .0.message)]
+    InvalidCase(CaseError),
+    #[error("the request body is larger than the limit of {limit} bytes")]
+    PayloadTooLarge { limit: usize },
+    #[error("the job queue is full ({capacity} jobs waiting); retry later")]
+    QueueFull { capacity: usize, retry_after_s: u64 },
+    #[error("the request is invalid: {0}")]
+    BadRequest(String),
+    #[error("no job with id {0}")]
+    JobNotFound(String),
+    #[error("job {id} has already finished ({status})")]
+    AlreadyFinished { id: String, status: String },
+    #[error("no route for {0}")]
+    RouteNotFound(String),
+    #[error("method not allowed")]
+    MethodNotAllowed,
+    #[error("the service is shutting down")]
+    ShuttingDown,
+    #[error("internal error")]
+    Internal(#[source] Box<dyn std::error::Error + Send + Sync>),
+}
+
+impl ApiError {
+    pub fn internal(e: impl Into<Box<dyn std::error::Error + Send + Sync>>) -> Self {
+        Self::Internal(e.into())
+    }
+
+    pub fn status(&self) -> StatusCode {
+        match self {
+            Self::MalformedJson(_) | Self::BadRequest(_) => StatusCode::BAD_REQUEST,
+            Self::InvalidCase(_) => StatusCode::UNPROCESSABLE_ENTITY,
+            Self::PayloadTooLarge { .. } => StatusCode::PAYLOAD_TOO_LARGE,
+            Self::QueueFull { .. } | Self::ShuttingDown => StatusCode::SERVICE_UNAVAILABLE,
+            Self::JobNotFound(_) | Self::RouteNotFound(_) => StatusCode::NOT_FOUND,
+            Self::AlreadyFinished { .. } => StatusCode::CONFLICT,
+            Self::MethodNotAllowed => StatusCode::METHOD_NOT_ALLOWED,
+            Self::Internal(_) => StatusCode::INTERNAL_SERVER_ERROR,
+        }
+    }
+
+    /// Stable machine-readable code (documented in api/openapi.yaml).
+    pub fn code(&self) -> &'static str {
+        match self {
+            Self::MalformedJson(_) => "malformed_json",
+            Self::InvalidCase(_) => "invalid_case",
+            Self::PayloadTooLarge { .. } => "payload_too_large",
+            Self::QueueFull { .. } => "queue_full",
+            Self::BadRequest(_) => "bad_request",
+            Self::JobNotFound(_) => "job_not_found",
+            Self::AlreadyFinished { .. } => "job_finished",
+            Self::RouteNotFound(_) => "route_not_found",
+            Self::MethodNotAllowed => "method_not_allowed",
+            Self::ShuttingDown => "shutting_down",
+            Self::Internal(_) => "internal",
+        }
+    }
+}
+
+impl From<sqlx::Error> for ApiError {
+    fn from(e: sqlx::Error) -> Self {
+        Self::internal(e)
+    }
+}
+
+impl From<std::io::Error> for ApiError {
+    fn from(e: std::io::Error) -> Self {
+        Self::internal(e)
+    }
+}
+
+impl IntoResponse for ApiError {
+    fn into_response(self) -> Response {
+        let status = self.status();
+        if let Self::Internal(cause) = &self {
+            tracing::error!(error = %cause, debug = ?cause, "internal error");
+        } else {
+            tracing::debug!(code = self.code(), message = %self, "request refused");
+        }
+        let path = match &self {
+            Self::InvalidCase(e) => serde_json::Value::String(e.path.clone()),
+            _ => serde_json::Value::Null,
+        };
+        let body = serde_json::json!({
+            "error": { "code": self.code(), "message": self.to_string(), "path": path }
+        });
+        let mut response = (status, Json(body)).into_response();
+        if let Self::QueueFull { retry_after_s, .. } = self {
+            response.headers_mut().insert(header::RETRY_AFTER, HeaderValue::from(retry_after_s));
+        }
+        response
+    }
+}

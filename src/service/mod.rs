@@ -1,0 +1,41 @@
+//! The job service of DESIGN.md §2.4: submit cases over HTTP, run them on a bounded
+//! worker pool, persist the job records (SQLite) and run directories under the data
+//! directory, and serve the load histories.
+//!
+//! Layout, after zero-to-production:
+//! - [`config`]: typed [`Config`] from flags and `MPSFSI_*` environment variables.
+//! - [`startup`]: [`App::build`] binds the listener (port 0 in tests), [`serve`] runs
+//!   until SIGTERM / Ctrl-C and shuts down gracefully.
+//! - [`routes`]: the HTTP handlers; [`error`]: the one [`ApiError`].
+//! - [`store`]: the job table. The table *is* the queue: a job is admitted by an insert
+//!   that checks the number of queued jobs in the same statement, and a worker claims the
+//!   oldest queued job with one `UPDATE ... RETURNING`, so a job is never lost between a
+//!   channel and the database, and a restart re-queues what was waiting.
+//! - [`workers`]: the worker pool; `run_case` runs on blocking threads, one job at a time
+//!   per worker, with cancellation and progress through the run [`crate::run::Observer`].
+//! - [`series`] (CSV -> JSON columns) and [`plot`] (the loads SVG).
+//!
+//! Restart semantics: a job found `running` when the service starts was interrupted by
+//! the death of the previous process and is marked `failed` with reason `interrupted`
+//! (its partial files are kept and still served); a job found `queued` is run again.
+
+pub mod config;
+pub mod error;
+pub mod plot;
+pub mod routes;
+pub mod series;
+pub mod startup;
+pub mod store;
+pub mod workers;
+
+pub use config::Config;
+pub use error::ApiError;
+pub use startup::{serve, App, ServeError, ShutdownHandle};
+
+/// The HTTP contract, served as JSON by `GET /v1/openapi.json`.
+pub const OPENAPI_YAML: &str = include_str!("../../api/openapi.yaml");
+
+/// The case a `POST /v1/jobs` with an empty body runs (DESIGN.md §4: the 30° wedge).
+/// `None` until `cases/wedge_30deg_constant_velocity.json` is on this branch; switch to
+/// `Some(include_str!("../../cases/wedge_30deg_constant_velocity.json"))` then.
+pub const DEFAULT_CASE: Option<&str> = None;

@@ -1,0 +1,286 @@
+//! HTTP handlers of DESIGN.md §2.4. The router is built from one table ([`endpoints`]),
+//! which is also what the contract test compares with `api/openapi.yaml`.
+
+use super::error::ApiError;
+use super::series::{self, SeriesFile};
+use super::store::{Admission, JobRow, JobStatus};
+use super::workers::Jobs;
+use crate::case::{parse_case_value, validate, Limits};
+use axum::body::Bytes;
+use axum::extract::rejection::{BytesRejection, QueryRejection};
+use axum::extract::{DefaultBodyLimit, Path, Query, State};
+use axum::http::{header, HeaderMap, Method, StatusCode, Uri};
+use axum::response::{IntoResponse, Response};
+use axum::routing::{on, MethodFilter, MethodRouter};
+use axum::{Json, Router};
+use serde::Deserialize;
+use serde_json::{json, Value};
+use std::sync::Arc;
+use uuid::Uuid;
+
+/// What every handler sees.
+#[derive(Debug, Clone)]
+pub struct AppState {
+    pub jobs: Arc<Jobs>,
+    pub openapi: Arc<Value>,
+}
+
+/// Seconds a client refused with 503 is told to wait.
+const RETRY_AFTER_S: u64 = 5;
+
+/// Every route: method, path (axum syntax, same as OpenAPI's), handler.
+pub fn endpoints() -> Vec<(Method, &'static str, MethodRouter<AppState>)> {
+    vec![
+        (Method::POST, "/v1/jobs", on(MethodFilter::POST, submit_job)),
+        (Method::GET, "/v1/jobs", on(MethodFilter::GET, list_jobs)),
+        (Method::GET, "/v1/jobs/{id}", on(MethodFilter::GET, get_job)),
+        (Method::DELETE, "/v1/jobs/{id}", on(MethodFilter::DELETE, cancel_job)),
+        (Method::GET, "/v1/jobs/{id}/loads", on(MethodFilter::GET, get_loads)),
+        (Method::GET, "/v1/jobs/{id}/bodies", on(MethodFilter::GET, get_bodies)),
+        (Method::GET, "/v1/jobs/{id}/probes", on(MethodFilter::GET, get_probes)),
+        (Method::GET, "/v1/jobs/{id}/loads.svg", on(MethodFilter::GET, get_loads_svg)),
+        (Method::GET, "/v1/health", on(MethodFilter::GET, health)),
+        (Method::GET, "/v1/openapi.json", on(MethodFilter::GET, openapi)),
+    ]
+}
+
+/// `(method, path)` of every route the server answers.
+pub fn route_table() -> Vec<(Method, &'static str)> {
+    endpoints().into_iter().map(|(m, p, _)| (m, p)).collect()
+}
+
+pub fn router(state: AppState, max_body_bytes: usize) -> Router {
+    let mut router = Router::new();
+    for (_, path, handler) in endpoints() {
+        router = router.route(path, handler);
+    }
+    router
+        .fallback(|uri: Uri| async move { ApiError::RouteNotFound(uri.path().to_string()) })
+        .method_not_allowed_fallback(|| async { ApiError::MethodNotAllowed })
+        .layer(DefaultBodyLimit::max(max_body_bytes))
+        .with_state(state)
+}
+
+/// The JSON form of a job record.
+pub fn job_json(row: &JobRow) -> Value {
+    let fraction = match row.status {
+        JobStatus::Succeeded => 1.0,
+        _ if row.end_time > 0.0 => (row.simulated_time / row.end_time).clamp(0.0, 1.0),
+        _ => 0.0,
+    };
+    let summary = row.summary.as_deref().and_then(|s| serde_json::from_str::<Value>(s).ok());
+    let base = format!("/v1/jobs/{}", row.id);
+    json!({
+        "id": row.id.to_string(),
+        "name": row.name,
+        "status": row.status.as_str(),
+        "created_at": row.created_at,
+        "started_at": row.started_at,
+        "finished_at": row.finished_at,
+        "progress": {
+            "step": row.step,
+            "simulated_time": row.simulated_time,
+            "end_time": row.end_time,
+            "fraction": fraction,
+        },
+        "particles": row.particles,
+        "reason": row.reason,
+        "summary": summary,
+        "links": {
+            "self": base,
+            "loads": format!("{base}/loads"),
+            "loads_svg": format!("{base}/loads.svg"),
+            "bodies": format!("{base}/bodies"),
+            "probes": format!("{base}/probes"),
+        },
+    })
+}
+
+fn parse_id(id: &str) -> Result<Uuid, ApiError> {
+    Uuid::parse_str(id).map_err(|_| ApiError::JobNotFound(id.to_string()))
+}
+
+async fn find_job(state: &AppState, id: &str) -> Result<JobRow, ApiError> {
+    let uuid = parse_id(id)?;
+    state.jobs.store.get(uuid).await?.ok_or_else(|| ApiError::JobNotFound(id.to_string()))
+}
+
+#[tracing::instrument(name = "submit job", skip_all)]
+async fn submit_job(State(state): State<AppState>, body: Result<Bytes, BytesRejection>) -> Result<Response, ApiError> {
+    let config = &state.jobs.config;
+    let body = body.map_err(|rejection| {
+        if rejection.status() == StatusCode::PAYLOAD_TOO_LARGE {
+            ApiError::PayloadTooLarge { limit: config.max_body_bytes }
+        } else {
+            ApiError::BadRequest(rejection.body_text())
+        }
+    })?;
+    // The job runs from the text as submitted, so it parses exactly as `mpsfsi run` would
+    // parse the same file.
+    let case_text: String = if body.iter().all(u8::is_ascii_whitespace) {
+        match super::DEFAULT_CASE {
+            Some(text) => text.to_string(),
+            None => return Err(ApiError::MalformedJson("the body is empty (no default case is built in)".into())),
+        }
+    } else {
+        String::from_utf8(body.to_vec()).map_err(|e| ApiError::MalformedJson(e.to_string()))?
+    };
+    let value: Value = serde_json::from_str(&case_text).map_err(|e| ApiError::MalformedJson(e.to_string()))?;
+    let case = parse_case_value(value).map_err(ApiError::InvalidCase)?;
+    validate(&case, &Limits { max_particles: config.max_particles }).map_err(ApiError::InvalidCase)?;
+    if state.jobs.is_stopping() {
+        return Err(ApiError::ShuttingDown);
+    }
+
+    let id = Uuid::new_v4();
+    let dir = config.job_dir(&id);
+    tokio::fs::create_dir_all(&dir).await?;
+    tokio::fs::write(dir.join("case.json"), &case_text).await?;
+    let admission = state.jobs.store.submit(id, &case.name, &case_text, case.time.end, config.queue_capacity).await;
+    match admission {
+        Ok(Admission::Accepted(row)) => {
+            state.jobs.job_queued();
+            tracing::info!(%id, name = %case.name, "job queued");
+            let location = format!("/v1/jobs/{id}");
+            Ok((StatusCode::CREATED, [(header::LOCATION, location)], Json(job_json(&row))).into_response())
+        }
+        Ok(Admission::QueueFull) => {
+            let _ = tokio::fs::remove_dir_all(&dir).await;
+            Err(ApiError::QueueFull { capacity: config.queue_capacity, retry_after_s: RETRY_AFTER_S })
+        }
+        Err(e) => {
+            let _ = tokio::fs::remove_dir_all(&dir).await;
+            Err(e.into())
+        }
+    }
+}
+
+#[derive(Debug, Deserialize)]
+struct ListQuery {
+    status: Option<String>,
+    limit: Option<i64>,
+    offset: Option<i64>,
+}
+
+const MAX_PAGE: i64 = 1000;
+
+#[tracing::instrument(name = "list jobs", skip_all)]
+async fn list_jobs(
+    State(state): State<AppState>,
+    query: Result<Query<ListQuery>, QueryRejection>,
+) -> Result<Json<Value>, ApiError> {
+    let Query(query) = query.map_err(|e| ApiError::BadRequest(e.body_text()))?;
+    let status = match query.status.as_deref() {
+        None | Some("") => None,
+        Some(s) => Some(JobStatus::parse(s).ok_or_else(|| {
+            ApiError::BadRequest(format!(
+                "unknown status {s:?} (expected queued, running, succeeded, failed or cancelled)"
+            ))
+        })?),
+    };
+    let limit = query.limit.unwrap_or(50);
+    let offset = query.offset.unwrap_or(0);
+    if !(1..=MAX_PAGE).contains(&limit) || offset < 0 {
+        return Err(ApiError::BadRequest(format!("limit must be 1..={MAX_PAGE} and offset >= 0")));
+    }
+    let (rows, total) = state.jobs.store.list(status, limit, offset).await?;
+    let jobs: Vec<Value> = rows.iter().map(job_json).collect();
+    Ok(Json(json!({ "jobs": jobs, "total": total, "limit": limit, "offset": offset })))
+}
+
+#[tracing::instrument(name = "get job", skip(state))]
+async fn get_job(State(state): State<AppState>, Path(id): Path<String>) -> Result<Json<Value>, ApiError> {
+    Ok(Json(job_json(&find_job(&state, &id).await?)))
+}
+
+#[tracing::instrument(name = "cancel job", skip(state))]
+async fn cancel_job(State(state): State<AppState>, Path(id): Path<String>) -> Result<Response, ApiError> {
+    let row = find_job(&state, &id).await?;
+    if row.status.is_finished() {
+        return Err(ApiError::AlreadyFinished { id, status: row.status.as_str().to_string() });
+    }
+    if state.jobs.store.cancel_if_queued(row.id).await? {
+        let row = find_job(&state, &id).await?;
+        return Ok((StatusCode::OK, Json(job_json(&row))).into_response());
+    }
+    // Running (or claimed since we looked): the run stops at its next step.
+    state.jobs.request_cancel(row.id);
+    let row = find_job(&state, &id).await?;
+    if row.status.is_finished() {
+        return Ok((StatusCode::OK, Json(job_json(&row))).into_response());
+    }
+    Ok((StatusCode::ACCEPTED, Json(job_json(&row))).into_response())
+}
+
+fn wants_csv(headers: &HeaderMap) -> bool {
+    headers
+        .get_all(header::ACCEPT)
+        .iter()
+        .filter_map(|v| v.to_str().ok())
+        .any(|v| v.split(',').any(|part| part.trim().starts_with("text/csv")))
+}
+
+/// The complete lines of a job's CSV file, or the header alone when nothing exists yet.
+async fn read_series(state: &AppState, row: &JobRow, file: SeriesFile) -> Result<Vec<u8>, ApiError> {
+    let path = state.jobs.config.job_dir(&row.id).join(file.file);
+    match tokio::fs::read(&path).await {
+        Ok(bytes) => Ok(series::complete_lines(&bytes).to_vec()),
+        Err(e) if e.kind() == std::io::ErrorKind::NotFound => Ok(format!("{}\n", file.header).into_bytes()),
+        Err(e) => Err(e.into()),
+    }
+}
+
+async fn serve_series(state: AppState, id: String, headers: HeaderMap, file: SeriesFile) -> Result<Response, ApiError> {
+    let row = find_job(&state, &id).await?;
+    let text = read_series(&state, &row, file).await?;
+    if wants_csv(&headers) {
+        return Ok(([(header::CONTENT_TYPE, "text/csv; charset=utf-8")], text).into_response());
+    }
+    let columns = series::csv_to_columns(&text).map_err(ApiError::internal)?;
+    let mut body = serde_json::Map::new();
+    body.insert("job".into(), Value::String(row.id.to_string()));
+    body.insert("status".into(), Value::String(row.status.as_str().into()));
+    body.insert(file.group.into(), Value::Object(columns));
+    Ok(Json(Value::Object(body)).into_response())
+}
+
+#[tracing::instrument(name = "get loads", skip(state, headers))]
+async fn get_loads(State(state): State<AppState>, Path(id): Path<String>, headers: HeaderMap) -> Result<Response, ApiError> {
+    serve_series(state, id, headers, series::LOADS).await
+}
+
+#[tracing::instrument(name = "get bodies", skip(state, headers))]
+async fn get_bodies(State(state): State<AppState>, Path(id): Path<String>, headers: HeaderMap) -> Result<Response, ApiError> {
+    serve_series(state, id, headers, series::BODIES).await
+}
+
+#[tracing::instrument(name = "get probes", skip(state, headers))]
+async fn get_probes(State(state): State<AppState>, Path(id): Path<String>, headers: HeaderMap) -> Result<Response, ApiError> {
+    serve_series(state, id, headers, series::PROBES).await
+}
+
+#[tracing::instrument(name = "get loads plot", skip(state))]
+async fn get_loads_svg(State(state): State<AppState>, Path(id): Path<String>) -> Result<Response, ApiError> {
+    let row = find_job(&state, &id).await?;
+    let text = read_series(&state, &row, series::LOADS).await?;
+    let title = format!("{} ({}): loads", row.name, row.status.as_str());
+    let svg = tokio::task::spawn_blocking(move || super::plot::loads_svg(&title, &series::load_rows(&text)))
+        .await
+        .map_err(ApiError::internal)?
+        .map_err(ApiError::internal)?;
+    Ok(([(header::CONTENT_TYPE, "image/svg+xml")], svg).into_response())
+}
+
+async fn health(State(state): State<AppState>) -> Result<Json<Value>, ApiError> {
+    state.jobs.store.ping().await?;
+    Ok(Json(json!({
+        "status": if state.jobs.is_stopping() { "stopping" } else { "ok" },
+        "version": env!("CARGO_PKG_VERSION"),
+        "workers": state.jobs.config.workers,
+        "running_jobs": state.jobs.running_jobs(),
+    })))
+}
+
+async fn openapi(State(state): State<AppState>) -> Json<Value> {
+    Json((*state.openapi).clone())
+}

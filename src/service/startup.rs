@@ -1,0 +1,154 @@
+//! Startup and shutdown. [`App::build`] opens the data directory and database, recovers
+//! jobs a previous process left behind, and binds the listener (port 0 in tests; the real
+//! port is [`App::port`]). [`App::run_until_stopped`] serves and runs the workers until
+//! SIGTERM, Ctrl-C or a [`ShutdownHandle`], then shuts down in order: stop accepting and
+//! finish in-flight requests; stop claiming jobs; give running jobs the grace period;
+//! interrupt the rest at their next step (recorded `failed` / `interrupted`); close the
+//! database. Queued jobs stay queued and run after the next start.
+
+use super::routes::{router, AppState};
+use super::store::JobStore;
+use super::workers::{run_worker_until_stopped, Jobs};
+use super::Config;
+use std::sync::Arc;
+use std::time::Instant;
+use tokio::net::TcpListener;
+use tokio::sync::watch;
+
+#[derive(Debug, thiserror::Error)]
+pub enum ServeError {
+    #[error("cannot create the data directory {path}: {source}")]
+    DataDir { path: String, source: std::io::Error },
+    #[error("cannot open the job database: {0}")]
+    Database(#[from] sqlx::Error),
+    #[error("cannot listen on {addr}: {source}")]
+    Bind { addr: String, source: std::io::Error },
+    #[error("api/openapi.yaml is not valid YAML: {0}")]
+    OpenApi(String),
+    #[error("the server stopped with an error: {0}")]
+    Serve(std::io::Error),
+}
+
+/// Triggers the graceful shutdown of a running [`App`] (tests; signals do the same).
+#[derive(Debug, Clone)]
+pub struct ShutdownHandle(watch::Sender<bool>);
+
+impl ShutdownHandle {
+    pub fn shutdown(&self) {
+        self.0.send_replace(true);
+    }
+}
+
+#[derive(Debug)]
+pub struct App {
+    port: u16,
+    listener: TcpListener,
+    jobs: Arc<Jobs>,
+    state: AppState,
+    shutdown: watch::Sender<bool>,
+}
+
+impl App {
+    pub async fn build(config: Config) -> Result<App, ServeError> {
+        let jobs_dir = config.data_dir.join("jobs");
+        std::fs::create_dir_all(&jobs_dir)
+            .map_err(|source| ServeError::DataDir { path: jobs_dir.display().to_string(), source })?;
+        let openapi: serde_json::Value =
+            serde_norway::from_str(super::OPENAPI_YAML).map_err(|e| ServeError::OpenApi(e.to_string()))?;
+        let store = JobStore::open(&config.database_url()).await?;
+        let interrupted = store.recover_interrupted().await?;
+        if interrupted > 0 {
+            tracing::warn!(interrupted, "jobs left running by a previous process are now failed (interrupted)");
+        }
+        let listener = TcpListener::bind(config.addr)
+            .await
+            .map_err(|source| ServeError::Bind { addr: config.addr.to_string(), source })?;
+        let port = listener.local_addr().map_err(ServeError::Serve)?.port();
+        let jobs = Arc::new(Jobs::new(store, config));
+        let state = AppState { jobs: jobs.clone(), openapi: Arc::new(openapi) };
+        let (shutdown, _) = watch::channel(false);
+        Ok(App { port, listener, jobs, state, shutdown })
+    }
+
+    pub fn port(&self) -> u16 {
+        self.port
+    }
+
+    pub fn shutdown_handle(&self) -> ShutdownHandle {
+        ShutdownHandle(self.shutdown.clone())
+    }
+
+    /// Serve and run the workers until a signal or the shutdown handle, then shut down.
+    pub async fn run_until_stopped(self) -> Result<(), ServeError> {
+        let App { listener, jobs, state, shutdown, .. } = self;
+        let config = jobs.config.clone();
+        let workers: Vec<_> =
+            (0..config.workers.max(1)).map(|_| tokio::spawn(run_worker_until_stopped(jobs.clone()))).collect();
+        jobs.job_queued(); // jobs re-queued from a previous process
+
+        let mut stop = shutdown.subscribe();
+        let signal = async move {
+            tokio::select! {
+                _ = os_signal() => tracing::info!("shutdown signal received"),
+                _ = stop.wait_for(|v| *v) => tracing::info!("shutdown requested"),
+            }
+        };
+        let app = router(state, config.max_body_bytes).layer(tower_http::trace::TraceLayer::new_for_http());
+        let served = axum::serve(listener, app).with_graceful_shutdown(signal).await;
+
+        jobs.stop_claiming();
+        let deadline = Instant::now() + config.shutdown_grace();
+        while jobs.running_jobs() > 0 && Instant::now() < deadline {
+            tokio::time::sleep(std::time::Duration::from_millis(50)).await;
+        }
+        if jobs.running_jobs() > 0 {
+            tracing::warn!(running = jobs.running_jobs(), "interrupting running jobs");
+        }
+        jobs.interrupt_running();
+        for worker in workers {
+            let _ = worker.await;
+        }
+        jobs.store.close().await;
+        tracing::info!("stopped");
+        served.map_err(ServeError::Serve)
+    }
+}
+
+async fn os_signal() {
+    let ctrl_c = async {
+        if tokio::signal::ctrl_c().await.is_err() {
+            std::future::pending::<()>().await;
+        }
+    };
+    #[cfg(unix)]
+    let terminate = async {
+        match tokio::signal::unix::signal(tokio::signal::unix::SignalKind::terminate()) {
+            Ok(mut s) => {
+                s.recv().await;
+            }
+            Err(_) => std::future::pending::<()>().await,
+        }
+    };
+    #[cfg(not(unix))]
+    let terminate = std::future::pending::<()>();
+    tokio::select! {
+        _ = ctrl_c => {}
+        _ = terminate => {}
+    }
+}
+
+/// `mpsfsi serve`: log to stderr (`RUST_LOG`, default `info`), build, serve until SIGTERM
+/// or Ctrl-C, shut down gracefully.
+pub async fn serve(config: Config) -> Result<(), ServeError> {
+    let filter = tracing_subscriber::EnvFilter::try_from_default_env()
+        .unwrap_or_else(|_| tracing_subscriber::EnvFilter::new("info"));
+    let _ = tracing_subscriber::fmt().with_env_filter(filter).with_writer(std::io::stderr).try_init();
+    let app = App::build(config.clone()).await?;
+    tracing::info!(
+        addr = %format!("{}:{}", config.addr.ip(), app.port()),
+        data = %config.data_dir.display(),
+        workers = config.workers,
+        "mpsfsi service listening"
+    );
+    app.run_until_stopped().await
+}

@@ -1,0 +1,122 @@
+//! Persistence across restarts: a server process killed (SIGKILL) mid-job, and a graceful
+//! shutdown mid-job, both restarted on the same data directory.
+
+use crate::helpers::{fresh_data_dir, long_case, spawn_app_on, tiny_case, Api};
+use mpsfsi::service::{serve, Config};
+use std::path::Path;
+use std::process::{Child, Command, Stdio};
+use std::time::{Duration, Instant};
+
+/// Run by [`a_killed_server_restarts_with_finished_jobs_intact`] as a child process when
+/// the binary has no `serve` subcommand: `MPSFSI_*` variables configure it.
+#[test]
+#[ignore = "a server process for the restart test"]
+fn child_server() {
+    if std::env::var("MPSFSI_TEST_CHILD").is_err() {
+        return;
+    }
+    #[derive(clap::Parser)]
+    struct Args {
+        #[command(flatten)]
+        config: Config,
+    }
+    let args = <Args as clap::Parser>::parse_from(["child_server"]);
+    let runtime = tokio::runtime::Runtime::new().unwrap();
+    runtime.block_on(serve(args.config)).unwrap();
+}
+
+fn free_port() -> u16 {
+    std::net::TcpListener::bind("127.0.0.1:0").unwrap().local_addr().unwrap().port()
+}
+
+/// `mpsfsi serve` when the binary has it, else this test binary's [`child_server`];
+/// returns once the server answers `/v1/health`.
+async fn spawn_server_process(data: &Path, port: u16, api: &Api) -> Child {
+    let addr = format!("127.0.0.1:{port}");
+    let mut real = Command::new(env!("CARGO_BIN_EXE_mpsfsi"));
+    real.args(["serve", "--addr", &addr, "--data"]).arg(data).args(["--workers", "1"]);
+    let mut fallback = Command::new(std::env::current_exe().unwrap());
+    fallback
+        .args(["restart::child_server", "--exact", "--ignored", "--nocapture"])
+        .env("MPSFSI_TEST_CHILD", "1")
+        .env("MPSFSI_ADDR", &addr)
+        .env("MPSFSI_DATA", data)
+        .env("MPSFSI_WORKERS", "1");
+    for mut cmd in [real, fallback] {
+        let mut child = cmd.stdout(Stdio::null()).stderr(Stdio::null()).spawn().expect("server process starts");
+        let start = Instant::now();
+        loop {
+            if let Ok(r) = api.client.get(api.url("/v1/health")).send().await {
+                if r.status().is_success() {
+                    return child;
+                }
+            }
+            if child.try_wait().unwrap().is_some() {
+                break; // this binary has no working `serve`: try the next command
+            }
+            assert!(start.elapsed() < Duration::from_secs(30), "server did not come up");
+            tokio::time::sleep(Duration::from_millis(50)).await;
+        }
+    }
+    panic!("no server process could be started");
+}
+
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn a_killed_server_restarts_with_finished_jobs_intact() {
+    let data = fresh_data_dir("killed");
+    let port = free_port();
+    let api = Api { address: format!("http://127.0.0.1:{port}"), client: reqwest::Client::new() };
+    let mut child = spawn_server_process(&data, port, &api).await;
+
+    let finished = api.submit(&tiny_case(0.005)).await;
+    assert_eq!(api.wait_finished(&finished).await["status"], "succeeded");
+    let (_, _, loads_before) = api.get_csv(&format!("/v1/jobs/{finished}/loads")).await;
+    let interrupted = api.submit(&long_case()).await;
+    api.wait_running(&interrupted).await;
+    let waiting = api.submit(&tiny_case(0.002)).await;
+    assert_eq!(api.job(&waiting).await["status"], "queued");
+
+    child.kill().unwrap(); // SIGKILL: no chance to clean up
+    child.wait().unwrap();
+
+    let app = spawn_app_on(data, |c| c.workers = 1).await;
+    let job = app.job(&finished).await;
+    assert_eq!(job["status"], "succeeded");
+    assert_eq!(job["summary"]["status"], "succeeded");
+    let (status, _, loads_after) = app.get_csv(&format!("/v1/jobs/{finished}/loads")).await;
+    assert_eq!(status, 200);
+    assert_eq!(loads_after, loads_before);
+
+    let job = app.job(&interrupted).await;
+    assert_eq!(job["status"], "failed", "{job:#}");
+    assert_eq!(job["reason"], "interrupted");
+    assert!(job["finished_at"].is_string());
+    let (status, _, partial) = app.get_csv(&format!("/v1/jobs/{interrupted}/loads")).await;
+    assert_eq!(status, 200);
+    assert!(partial.starts_with(mpsfsi::output::LOADS_HEADER));
+
+    // The queued job was re-queued and runs.
+    assert_eq!(app.wait_finished(&waiting).await["status"], "succeeded");
+    let (_, list) = app.get_json("/v1/jobs").await;
+    assert_eq!(list["total"], 3);
+    app.stop().await;
+}
+
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn a_graceful_shutdown_interrupts_running_jobs_and_keeps_queued_ones() {
+    let data = fresh_data_dir("graceful");
+    let app = spawn_app_on(data.clone(), |c| c.workers = 1).await;
+    let running = app.submit(&long_case()).await;
+    app.wait_running(&running).await;
+    let waiting = app.submit(&tiny_case(0.002)).await;
+    let started = Instant::now();
+    app.stop().await;
+    assert!(started.elapsed() < Duration::from_secs(20), "shutdown took {:?}", started.elapsed());
+
+    let app = spawn_app_on(data, |c| c.workers = 1).await;
+    let job = app.job(&running).await;
+    assert_eq!(job["status"], "failed", "{job:#}");
+    assert_eq!(job["reason"], "interrupted");
+    assert_eq!(app.wait_finished(&waiting).await["status"], "succeeded");
+    app.stop().await;
+}

@@ -1,0 +1,125 @@
+//! The happy path: submit a real case, poll to `succeeded`, and check that the service
+//! serves exactly what `run_case` writes for the same case (nothing added, nothing lost).
+
+use crate::helpers::{fresh_data_dir, spawn_app, tiny_case};
+use crate::schema::assert_conforms;
+use mpsfsi::case::parse_case_value;
+use mpsfsi::run::{run_case, Quiet};
+use serde_json::Value;
+
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn submitted_case_succeeds_and_serves_the_same_files_as_run_case() {
+    let app = spawn_app("submit", |_| {}).await;
+    let case = tiny_case(0.005);
+
+    let response = app.post_case(&case).await;
+    assert_eq!(response.status().as_u16(), 201);
+    let location = response.headers()["location"].to_str().unwrap().to_string();
+    let created: Value = response.json().await.unwrap();
+    assert_conforms("POST", "/v1/jobs", 201, &created);
+    assert_eq!(created["status"], "queued");
+    let id = created["id"].as_str().unwrap().to_string();
+    assert_eq!(location, format!("/v1/jobs/{id}"));
+
+    let job = app.wait_finished(&id).await;
+    assert_eq!(job["status"], "succeeded", "{job:#}");
+    assert_conforms("GET", "/v1/jobs/{id}", 200, &job);
+    assert_eq!(job["progress"]["fraction"], 1.0);
+    assert_eq!(job["summary"]["status"], "succeeded");
+    assert!(job["finished_at"].is_string() && job["started_at"].is_string());
+
+    // The same case run directly, into another directory.
+    let direct_dir = fresh_data_dir("direct");
+    let parsed = parse_case_value(case.clone()).unwrap();
+    let out = direct_dir.clone();
+    let summary = tokio::task::spawn_blocking(move || run_case(&parsed, &out, &mut Quiet)).await.unwrap().unwrap();
+    assert_eq!(job["summary"]["steps"], summary.steps);
+    assert_eq!(job["particles"], summary.particles);
+
+    for (route, file) in [("loads", "loads.csv"), ("probes", "probes.csv")] {
+        let (status, content_type, served) = app.get_csv(&format!("/v1/jobs/{id}/{route}")).await;
+        assert_eq!(status, 200);
+        assert!(content_type.starts_with("text/csv"), "{content_type}");
+        let direct = std::fs::read_to_string(direct_dir.join(file)).unwrap();
+        assert!(direct.lines().count() > 1, "{file} has rows");
+        assert_eq!(served, direct, "{route} CSV differs from what run_case writes");
+    }
+
+    // JSON columns hold the same numbers as the CSV rows.
+    let (status, loads) = app.get_json(&format!("/v1/jobs/{id}/loads")).await;
+    assert_eq!(status, 200);
+    assert_conforms("GET", "/v1/jobs/{id}/loads", 200, &loads);
+    let direct = std::fs::read_to_string(direct_dir.join("loads.csv")).unwrap();
+    let rows: Vec<Vec<&str>> = direct.lines().skip(1).map(|l| l.split(',').collect()).collect();
+    let tank = &loads["bodies"]["tank"];
+    let tank_rows: Vec<&Vec<&str>> = rows.iter().filter(|r| r[1] == "tank").collect();
+    assert_eq!(tank["time"].as_array().unwrap().len(), tank_rows.len());
+    for (k, row) in tank_rows.iter().enumerate() {
+        for (col, name) in [(0, "time"), (2, "fx"), (3, "fy"), (4, "mz")] {
+            // serde_json's default float parser (client side) may be off by an ulp.
+            let (served, written) = (tank[name][k].as_f64().unwrap(), row[col].parse::<f64>().unwrap());
+            assert!((served - written).abs() <= 1e-15 * written.abs(), "{name}[{k}]: {served} vs {written}");
+        }
+    }
+    let (status, probes) = app.get_json(&format!("/v1/jobs/{id}/probes")).await;
+    assert_eq!(status, 200);
+    assert_conforms("GET", "/v1/jobs/{id}/probes", 200, &probes);
+    assert!(probes["probes"]["mid"]["pressure"].as_array().unwrap().len() > 1);
+
+    // No bodies in this case: bodies is an empty series, not an error.
+    let (status, bodies) = app.get_json(&format!("/v1/jobs/{id}/bodies")).await;
+    assert_eq!(status, 200);
+    assert_conforms("GET", "/v1/jobs/{id}/bodies", 200, &bodies);
+
+    // The plot is an SVG naming the series.
+    let svg = app.client.get(app.url(&format!("/v1/jobs/{id}/loads.svg"))).send().await.unwrap();
+    assert_eq!(svg.status().as_u16(), 200);
+    assert_eq!(svg.headers()["content-type"], "image/svg+xml");
+    let svg = svg.text().await.unwrap();
+    assert!(svg.starts_with("<svg") && svg.contains("tank"), "{}", &svg[..svg.len().min(300)]);
+
+    // The run directory keeps the case as submitted.
+    let saved = std::fs::read(app.data_dir.join("jobs").join(&id).join("case.json")).unwrap();
+    assert_eq!(saved, serde_json::to_vec(&case).unwrap());
+
+    // Listing and filtering.
+    let (status, list) = app.get_json("/v1/jobs?status=succeeded&limit=10").await;
+    assert_eq!(status, 200);
+    assert_conforms("GET", "/v1/jobs", 200, &list);
+    assert_eq!(list["total"], 1);
+    assert_eq!(list["jobs"][0]["id"], id.as_str());
+    let (_, none) = app.get_json("/v1/jobs?status=running").await;
+    assert_eq!(none["total"], 0);
+    let (status, bad) = app.get_json("/v1/jobs?status=done").await;
+    assert_eq!(status, 400);
+    assert_conforms("GET", "/v1/jobs", 400, &bad);
+
+    // A finished job cannot be cancelled.
+    let r = app.client.delete(app.url(&format!("/v1/jobs/{id}"))).send().await.unwrap();
+    assert_eq!(r.status().as_u16(), 409);
+    let body: Value = r.json().await.unwrap();
+    assert_conforms("DELETE", "/v1/jobs/{id}", 409, &body);
+    app.stop().await;
+}
+
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn listing_pages_newest_first() {
+    let app = spawn_app("paging", |c| c.workers = 1).await;
+    let mut ids = Vec::new();
+    for _ in 0..5 {
+        ids.push(app.submit(&tiny_case(0.001)).await);
+    }
+    for id in &ids {
+        assert_eq!(app.wait_finished(id).await["status"], "succeeded");
+    }
+    let (_, page1) = app.get_json("/v1/jobs?limit=2").await;
+    let (_, page2) = app.get_json("/v1/jobs?limit=2&offset=2").await;
+    let (_, page3) = app.get_json("/v1/jobs?limit=2&offset=4").await;
+    let listed: Vec<String> = [page1, page2, page3]
+        .iter()
+        .flat_map(|p| p["jobs"].as_array().unwrap().iter().map(|j| j["id"].as_str().unwrap().to_string()).collect::<Vec<_>>())
+        .collect();
+    let newest_first: Vec<String> = ids.iter().rev().cloned().collect();
+    assert_eq!(listed, newest_first);
+    app.stop().await;
+}
