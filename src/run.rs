@@ -67,6 +67,8 @@ pub struct Summary {
     pub min_dt: Real,
     pub max_dt: Real,
     pub mean_solver_iterations: Real,
+    /// Width of the zero-phase moving average of loads_filtered.csv (s).
+    pub filter_window_s: Real,
     pub stage_seconds: StageTimes,
     pub n0: Real,
     pub scheme: Scheme,
@@ -160,6 +162,9 @@ pub fn run_case(case: &Case, out_dir: &Path, observer: &mut dyn Observer) -> Res
     if let Some(s) = &mut snapshots {
         s.finish()?;
     }
+    // raw loads stay the reference; the filtered copy keeps their impulse exactly
+    let filter_window_s = crate::output::filter::filter_window(case);
+    crate::output::filter::write_filtered_loads(out_dir, filter_window_s)?;
     let (status, reason) = match failure {
         None => (RunStatus::Succeeded, None),
         Some((s, r)) => (s, Some(r)),
@@ -178,6 +183,7 @@ pub fn run_case(case: &Case, out_dir: &Path, observer: &mut dyn Observer) -> Res
         min_dt: if min_dt.is_finite() { min_dt } else { 0.0 },
         max_dt,
         mean_solver_iterations: if sim.steps > 0 { sim.total_solver_iterations as Real / sim.steps as Real } else { 0.0 },
+        filter_window_s,
         stage_seconds: sim.stage_times,
         n0: sim.params.n0,
         scheme: sim.scheme.clone(),

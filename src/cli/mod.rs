@@ -9,7 +9,6 @@ mod progress;
 mod run;
 
 use clap::{Parser, Subcommand};
-use std::net::SocketAddr;
 use std::path::PathBuf;
 
 pub const EXIT_FAILED_RUN: i32 = 1;
@@ -49,31 +48,9 @@ pub enum Command {
     /// Print the JSON Schema of the case format (the text of api/case.schema.json).
     Schema,
     /// Run the HTTP job service (DESIGN.md §2.4).
-    Serve(ServeArgs),
+    Serve(mpsfsi::service::Config),
     /// Run the run-time-versus-error study and write its report (DESIGN.md §5).
     Bench(BenchArgs),
-}
-
-#[derive(clap::Args, Debug, Clone)]
-pub struct ServeArgs {
-    /// Address to listen on (port 0 picks a free port).
-    #[arg(long, default_value = "127.0.0.1:8080", env = "MPSFSI_ADDR")]
-    pub addr: SocketAddr,
-    /// Directory holding jobs and their results (survives restarts).
-    #[arg(long, env = "MPSFSI_DATA")]
-    pub data: Option<PathBuf>,
-    /// Simulations run side by side.
-    #[arg(long, env = "MPSFSI_WORKERS")]
-    pub workers: Option<usize>,
-    /// Queued jobs beyond which submissions get 503.
-    #[arg(long, env = "MPSFSI_QUEUE_CAPACITY")]
-    pub queue_capacity: Option<usize>,
-    /// Largest particle count a submitted case may create.
-    #[arg(long, env = "MPSFSI_MAX_PARTICLES")]
-    pub max_particles: Option<usize>,
-    /// Largest request body in bytes (413 beyond).
-    #[arg(long, env = "MPSFSI_MAX_BODY_BYTES")]
-    pub max_body_bytes: Option<usize>,
 }
 
 #[derive(clap::Args, Debug, Clone)]
@@ -84,7 +61,7 @@ pub struct BenchArgs {
     /// Include the operator convergence study.
     #[arg(long)]
     pub operators: bool,
-    /// Include the stress (throughput) study.
+    /// Include the stress study (CFL sweep of the dam break per variant).
     #[arg(long)]
     pub stress: bool,
     /// Directory for report.md, results.csv and the plots.
