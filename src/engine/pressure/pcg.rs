@@ -126,18 +126,36 @@ impl Ic0 {
     }
 }
 
-/// Preconditioned conjugate gradients; `x` is the initial guess.
-pub fn conjugate_gradient(a: &CsrMatrix, b: &[Real], x: &mut [Real], params: SolveParams, pre: Preconditioner) -> Result<SolveInfo, SolveError> {
-    let n = a.n;
-    if n == 0 {
-        return Ok(SolveInfo::default());
+/// What both Krylov solvers start from: ||b||, the inverse diagonal and r = b - A x.
+/// `None` when there is nothing to solve (empty system, or b = 0 and then x = 0).
+struct Start {
+    bnorm: Real,
+    inv_diag: Vec<Real>,
+    r: Vec<Real>,
+}
+
+fn start(a: &CsrMatrix, b: &[Real], x: &mut [Real]) -> Option<Start> {
+    if a.n == 0 {
+        return None;
     }
     let bnorm = dot(b, b).sqrt();
     if bnorm == 0.0 {
         x.iter_mut().for_each(|v| *v = 0.0);
-        return Ok(SolveInfo::default());
+        return None;
     }
-    let inv_diag: Vec<Real> = a.diagonal().iter().map(|d| if *d != 0.0 { 1.0 / d } else { 1.0 }).collect();
+    let inv_diag = a.diagonal().iter().map(|d| if *d != 0.0 { 1.0 / d } else { 1.0 }).collect();
+    let mut r = vec![0.0; a.n];
+    a.mul(x, &mut r);
+    r.iter_mut().zip(b).for_each(|(ri, bi)| *ri = bi - *ri);
+    Some(Start { bnorm, inv_diag, r })
+}
+
+/// Preconditioned conjugate gradients; `x` is the initial guess.
+pub fn conjugate_gradient(a: &CsrMatrix, b: &[Real], x: &mut [Real], params: SolveParams, pre: Preconditioner) -> Result<SolveInfo, SolveError> {
+    let n = a.n;
+    let Some(Start { bnorm, inv_diag, r: r0 }) = start(a, b, x) else {
+        return Ok(SolveInfo::default());
+    };
     let ic = match pre {
         Preconditioner::IncompleteCholesky => Ic0::new(a),
         Preconditioner::Jacobi => None,
@@ -146,9 +164,7 @@ pub fn conjugate_gradient(a: &CsrMatrix, b: &[Real], x: &mut [Real], params: Sol
         Some(ic) => ic.apply(r, z),
         None => z.iter_mut().enumerate().for_each(|(i, zi)| *zi = r[i] * inv_diag[i]),
     };
-    let mut r = vec![0.0; n];
-    a.mul(x, &mut r);
-    r.par_iter_mut().zip(b.par_iter()).for_each(|(ri, bi)| *ri = bi - *ri);
+    let mut r = r0;
     let mut z = vec![0.0; n];
     precondition(&r, &mut z);
     let mut p = z.clone();
@@ -185,20 +201,11 @@ pub fn conjugate_gradient(a: &CsrMatrix, b: &[Real], x: &mut [Real], params: Sol
 /// BiCGSTAB with a Jacobi preconditioner, for non-symmetric operators.
 pub fn bicgstab(a: &CsrMatrix, b: &[Real], x: &mut [Real], params: SolveParams) -> Result<SolveInfo, SolveError> {
     let n = a.n;
-    if n == 0 {
+    let Some(Start { bnorm, inv_diag, r: r0 }) = start(a, b, x) else {
         return Ok(SolveInfo::default());
-    }
-    let bnorm = dot(b, b).sqrt();
-    if bnorm == 0.0 {
-        x.iter_mut().for_each(|v| *v = 0.0);
-        return Ok(SolveInfo::default());
-    }
-    let inv_diag: Vec<Real> = a.diagonal().iter().map(|d| if *d != 0.0 { 1.0 / d } else { 1.0 }).collect();
+    };
     let jac = |v: &[Real], out: &mut [Real]| out.par_iter_mut().enumerate().for_each(|(i, o)| *o = v[i] * inv_diag[i]);
-    let mut r = vec![0.0; n];
-    a.mul(x, &mut r);
-    r.par_iter_mut().zip(b.par_iter()).for_each(|(ri, bi)| *ri = bi - *ri);
-    let r0 = r.clone();
+    let mut r = r0.clone();
     let (mut rho, mut alpha, mut omega) = (1.0, 1.0, 1.0);
     let mut v = vec![0.0; n];
     let mut p = vec![0.0; n];
