@@ -70,6 +70,8 @@ pub struct Summary {
     /// Width of the zero-phase moving average of loads_filtered.csv (s).
     pub filter_window_s: Real,
     pub stage_seconds: StageTimes,
+    /// Wall-clock seconds in the rigid-body coupling (0 without bodies).
+    pub coupling_seconds: f64,
     pub n0: Real,
     pub scheme: Scheme,
     pub version: String,
@@ -185,6 +187,7 @@ pub fn run_case(case: &Case, out_dir: &Path, observer: &mut dyn Observer) -> Res
         mean_solver_iterations: if sim.steps > 0 { sim.total_solver_iterations as Real / sim.steps as Real } else { 0.0 },
         filter_window_s,
         stage_seconds: sim.stage_times,
+        coupling_seconds: coupling.as_ref().map_or(0.0, |c| c.seconds),
         n0: sim.params.n0,
         scheme: sim.scheme.clone(),
         version: env!("CARGO_PKG_VERSION").to_string(),

@@ -38,13 +38,11 @@ pub(crate) struct Scratch {
     /// u^n, before the explicit forces.
     u_start: Vec<Vec2>,
     n_star: Vec<Real>,
-    div_star: Vec<Real>,
     unknown_of: Vec<u32>,
     particle_of: Vec<u32>,
     rhs: Vec<Real>,
     solution: Vec<Real>,
     neumann: Vec<Vec2>,
-    gradient: Vec<Vec2>,
     /// Dirichlet value of each free-surface particle (0 elsewhere).
     surface_pressure: Vec<Real>,
     matrix: CsrMatrix,
@@ -130,8 +128,11 @@ fn step<K: Kernel>(sim: &mut Simulation, dt: Real) -> Result<StepInfo, SimError>
     let mut clock = Instant::now();
     let weights = KernelWeights::<K>::new(sim);
 
+    // loads of this step, one per wall object, accumulated by every stage with a wall term
+    let mut loads = vec![WallLoad::default(); sim.walls.len()];
+
     // u* = u + dt (g + nu ∇²u); x* = x + dt u*  (paper 003 eqs. 9-10)
-    apply_explicit_forces::<K>(sim, &weights, dt);
+    apply_explicit_forces::<K>(sim, &weights, dt, &mut loads);
     predict_positions(sim, dt);
     sim.stage_times.explicit_forces += seconds(&mut clock);
 
@@ -155,7 +156,6 @@ fn step<K: Kernel>(sim: &mut Simulation, dt: Real) -> Result<StepInfo, SimError>
     sim.stage_times.solve += seconds(&mut clock);
 
     // u^{n+1} = u* - dt/rho ∇p, x^{n+1} = x* + dt (u^{n+1} - u*); wall loads as reactions
-    let mut loads = vec![WallLoad::default(); sim.walls.len()];
     correct_velocity_and_position::<K>(sim, &walls, dt, &mut loads);
     sim.stage_times.correct += seconds(&mut clock);
     keep_particles_apart(sim, &walls, dt, &mut loads);
@@ -163,9 +163,8 @@ fn step<K: Kernel>(sim: &mut Simulation, dt: Real) -> Result<StepInfo, SimError>
 
     // n and ∇·u at the end of the step, for the error-compensating source
     update_number_density_and_divergence::<K>(sim);
-    for (w, load) in loads.iter_mut().enumerate() {
-        let _ = w;
-        load.force = load.pressure_force + load.repulsion_force + load.viscous_force + load.force;
+    for load in &mut loads {
+        load.force = load.pressure_force + load.repulsion_force + load.viscous_force;
     }
     sim.loads = loads;
     for wall in &mut sim.walls {
@@ -181,7 +180,7 @@ fn step<K: Kernel>(sim: &mut Simulation, dt: Real) -> Result<StepInfo, SimError>
 }
 
 /// Gravity and (when nu > 0) viscosity with no-slip walls.
-fn apply_explicit_forces<K: Kernel>(sim: &mut Simulation, weights: &KernelWeights<K>, dt: Real) {
+fn apply_explicit_forces<K: Kernel>(sim: &mut Simulation, weights: &KernelWeights<K>, dt: Real, loads: &mut [WallLoad]) {
     let g = vec2(sim.params.gravity);
     let nu = sim.params.viscosity;
     sim.scratch.u_start.clone_from(&sim.particles.velocity);
@@ -224,7 +223,7 @@ fn apply_explicit_forces<K: Kernel>(sim: &mut Simulation, weights: &KernelWeight
                 let total: Real = sim.contacts.of(i).iter().map(|c| c.terms.laplacian_sum).sum();
                 if total > 0.0 {
                     let share = aw * (ct.terms.laplacian_sum / total);
-                    sim.loads[ct.object as usize].viscous_force -= share * m;
+                    loads[ct.object as usize].viscous_force -= share * m;
                 }
             }
         }
@@ -459,7 +458,6 @@ fn assemble_pressure_equation<K: Kernel>(sim: &mut Simulation, weights: &KernelW
     }
     // warm start from the last pressures
     sim.scratch.solution = particle_of.iter().map(|&i| sim.particles.pressure[i as usize]).collect();
-    sim.scratch.div_star = div_star;
     sim.scratch.matrix = m;
     sim.scratch.rhs = rhs;
     sim.scratch.unknown_of = unknown_of;
@@ -591,7 +589,6 @@ fn correct_velocity_and_position<K: Kernel>(sim: &mut Simulation, walls: &[Place
         .zip(x.par_iter())
         .zip(total.par_iter())
         .for_each(|((pos, xs), g)| *pos = xs - g * (scale * dt));
-    sim.scratch.gradient = total;
 }
 
 /// Safety net: pairwise collision below `collision_distance` l0 and an inelastic
