@@ -1,3 +1,5 @@
+//! Diagnostic: the dam-break surge front against Martin & Moyce at their sample times.
+//! `cargo run --release --example dam_front -- cases/dam_break.json [PATH=VALUE]...`
 use mpsfsi::case::load_case_file;
 use mpsfsi::engine::Simulation;
 fn main() {
