@@ -24,7 +24,11 @@ pub struct Progress {
 
 impl Progress {
     pub fn fraction(&self) -> Real {
-        if self.end_time > 0.0 { (self.simulated_time / self.end_time).clamp(0.0, 1.0) } else { 1.0 }
+        if self.end_time > 0.0 {
+            (self.simulated_time / self.end_time).clamp(0.0, 1.0)
+        } else {
+            1.0
+        }
     }
 }
 
@@ -92,7 +96,8 @@ pub fn estimate_steps(case: &Case) -> u64 {
     let h = case.domain.max[1] - case.domain.min[1];
     let mut u = (2.0 * g * h.max(0.0)).sqrt() * 0.5;
     for b in &case.bodies {
-        let (case::Motion::Prescribed { velocity, .. } | case::Motion::Free { velocity, .. }) = &b.motion;
+        let (case::Motion::Prescribed { velocity, .. } | case::Motion::Free { velocity, .. }) =
+            &b.motion;
         u = u.max(vec2(*velocity).norm());
     }
     let mut dt = case.time.max_dt;
@@ -103,15 +108,33 @@ pub fn estimate_steps(case: &Case) -> u64 {
 }
 
 /// Validate, build, step to the end time (or failure / cancellation), write the run directory.
-pub fn run_case(case: &Case, out_dir: &Path, observer: &mut dyn Observer) -> Result<Summary, RunError> {
+pub fn run_case(
+    case: &Case,
+    out_dir: &Path,
+    observer: &mut dyn Observer,
+) -> Result<Summary, RunError> {
     case::validate(case, &Limits::default())?;
     let started = Instant::now();
     let mut sim = Simulation::new(case);
     let mut coupling = Coupling::new(case, &sim);
-    let probes: Vec<ProbePoint> =
-        case.output.probes.iter().map(|p| ProbePoint { name: p.name.clone(), position: vec2(p.position) }).collect();
-    let mut writer = RunWriter::create(out_dir, case.output.load_interval, sim.wall_names(), coupling.is_some(), probes)?;
-    let mut snapshots = crate::output::snapshots::SnapshotWriter::create(out_dir, case.output.snapshot_interval)?;
+    let probes: Vec<ProbePoint> = case
+        .output
+        .probes
+        .iter()
+        .map(|p| ProbePoint {
+            name: p.name.clone(),
+            position: vec2(p.position),
+        })
+        .collect();
+    let mut writer = RunWriter::create(
+        out_dir,
+        case.output.load_interval,
+        sim.wall_names(),
+        coupling.is_some(),
+        probes,
+    )?;
+    let mut snapshots =
+        crate::output::snapshots::SnapshotWriter::create(out_dir, case.output.snapshot_interval)?;
     if let Some(s) = &mut snapshots {
         s.record(&sim)?;
     }
@@ -121,7 +144,14 @@ pub fn run_case(case: &Case, out_dir: &Path, observer: &mut dyn Observer) -> Res
     let mut failure: Option<(RunStatus, String)> = None;
     while sim.time < end * (1.0 - 1e-12) {
         if observer.is_cancelled() {
-            failure = Some((RunStatus::Cancelled, SimError::Cancelled { step: sim.steps, time: sim.time }.to_string()));
+            failure = Some((
+                RunStatus::Cancelled,
+                SimError::Cancelled {
+                    step: sim.steps,
+                    time: sim.time,
+                }
+                .to_string(),
+            ));
             break;
         }
         // do not overshoot the end time by more than a sliver
@@ -140,7 +170,10 @@ pub fn run_case(case: &Case, out_dir: &Path, observer: &mut dyn Observer) -> Res
                 min_dt = min_dt.min(dt);
                 max_dt = max_dt.max(dt);
                 max_velocity = max_velocity.max(info.max_speed);
-                let bodies = coupling.as_ref().map(|c| c.samples(&sim)).unwrap_or_default();
+                let bodies = coupling
+                    .as_ref()
+                    .map(|c| c.samples(&sim))
+                    .unwrap_or_default();
                 writer.record(&sim, dt, &bodies)?;
                 if let Some(s) = &mut snapshots {
                     s.record(&sim)?;
@@ -184,7 +217,11 @@ pub fn run_case(case: &Case, out_dir: &Path, observer: &mut dyn Observer) -> Res
         max_velocity,
         min_dt: if min_dt.is_finite() { min_dt } else { 0.0 },
         max_dt,
-        mean_solver_iterations: if sim.steps > 0 { sim.total_solver_iterations as Real / sim.steps as Real } else { 0.0 },
+        mean_solver_iterations: if sim.steps > 0 {
+            sim.total_solver_iterations as Real / sim.steps as Real
+        } else {
+            0.0
+        },
         filter_window_s,
         stage_seconds: sim.stage_times,
         coupling_seconds: coupling.as_ref().map_or(0.0, |c| c.seconds),

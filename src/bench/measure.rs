@@ -7,7 +7,12 @@ use crate::engine::math::Real;
 /// Time-weighted mean of a series of interval means (`times[k]` ends the interval of
 /// `values[k]`, the first starting at `start`) over the intervals ending after `from`.
 /// None when no interval qualifies.
-pub fn interval_mean_after(start: Real, times: &[Real], values: &[Real], from: Real) -> Option<Real> {
+pub fn interval_mean_after(
+    start: Real,
+    times: &[Real],
+    values: &[Real],
+    from: Real,
+) -> Option<Real> {
     let (mut sum, mut span) = (0.0, 0.0);
     let mut previous = start;
     for (t, v) in times.iter().zip(values) {
@@ -22,7 +27,12 @@ pub fn interval_mean_after(start: Real, times: &[Real], values: &[Real], from: R
 
 /// Mean and standard deviation of point samples taken at or after `from`.
 pub fn sample_stats_after(times: &[Real], values: &[Real], from: Real) -> Option<(Real, Real)> {
-    let picked: Vec<Real> = times.iter().zip(values).filter(|(t, _)| **t >= from).map(|(_, v)| *v).collect();
+    let picked: Vec<Real> = times
+        .iter()
+        .zip(values)
+        .filter(|(t, _)| **t >= from)
+        .map(|(_, v)| *v)
+        .collect();
     if picked.is_empty() {
         return None;
     }
@@ -42,7 +52,11 @@ pub fn relative_error(measured: Real, expected: Real) -> Real {
 /// droplet ahead of the front does not count), plus l0/2 (a particle stands for a cell
 /// of width l0). None when no particle is near the floor.
 pub fn surge_front(points: &[(Real, Real)], floor: Real, band: Real, l0: Real) -> Option<Real> {
-    let mut near: Vec<(Real, Real)> = points.iter().copied().filter(|(_, y)| *y - floor < band).collect();
+    let mut near: Vec<(Real, Real)> = points
+        .iter()
+        .copied()
+        .filter(|(_, y)| *y - floor < band)
+        .collect();
     near.sort_by(|a, b| b.0.total_cmp(&a.0));
     let reach2 = (2.0 * l0).powi(2);
     for (i, p) in near.iter().enumerate() {
@@ -82,7 +96,10 @@ pub fn surge_front_rms_error(front: &[(Real, Real)]) -> Option<Real> {
     let (lo, hi) = SURGE_COMPARISON_RANGE;
     let mut sum = 0.0;
     let mut count = 0;
-    for &(t, z) in MARTIN_MOYCE_SURGE.iter().filter(|(t, _)| *t >= lo && *t <= hi) {
+    for &(t, z) in MARTIN_MOYCE_SURGE
+        .iter()
+        .filter(|(t, _)| *t >= lo && *t <= hi)
+    {
         let simulated = interpolate(&sorted, t)?;
         sum += ((simulated - z) / z).powi(2);
         count += 1;

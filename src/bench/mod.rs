@@ -62,12 +62,25 @@ pub struct Variant {
 pub fn variants() -> Vec<Variant> {
     use crate::case::{GradientKind, LaplacianKind, SolverKind};
     vec![
-        Variant { name: "classic", description: "Koshizuka & Oka 1996: minimum-pressure gradient, classic Laplacian, PND source", scheme: Scheme::classic() },
-        Variant { name: "default", description: "the scheme block's defaults (HS + ECS source, HL Laplacian, GC gradient)", scheme: Scheme::default() },
+        Variant {
+            name: "classic",
+            description:
+                "Koshizuka & Oka 1996: minimum-pressure gradient, classic Laplacian, PND source",
+            scheme: Scheme::classic(),
+        },
+        Variant {
+            name: "default",
+            description: "the scheme block's defaults (HS + ECS source, HL Laplacian, GC gradient)",
+            scheme: Scheme::default(),
+        },
         Variant {
             name: "chl",
             description: "default with the corrected higher-order Laplacian CHL (BiCGSTAB)",
-            scheme: Scheme { laplacian: LaplacianKind::CorrectedHigherOrder, solver: SolverKind::Bicgstab, ..Scheme::default() },
+            scheme: Scheme {
+                laplacian: LaplacianKind::CorrectedHigherOrder,
+                solver: SolverKind::Bicgstab,
+                ..Scheme::default()
+            },
         },
         Variant {
             name: "least_squares",
@@ -124,7 +137,12 @@ fn cases_dir() -> PathBuf {
 
 fn read_case_value(path: &Path) -> io::Result<Value> {
     let text = std::fs::read_to_string(path)?;
-    serde_json::from_str(&text).map_err(|e| io::Error::new(io::ErrorKind::InvalidData, format!("{}: {e}", path.display())))
+    serde_json::from_str(&text).map_err(|e| {
+        io::Error::new(
+            io::ErrorKind::InvalidData,
+            format!("{}: {e}", path.display()),
+        )
+    })
 }
 
 /// The Koshizuka & Oka (1996) dam break (column L × 2L in a tank 4L wide, L = 0.146 m),
@@ -156,16 +174,27 @@ pub fn bench_cases(quick: bool) -> io::Result<Vec<BenchCase>> {
         cases.push(BenchCase {
             name: "hydrostatic",
             base: read_case_value(&hydrostatic)?,
-            spacings: if quick { vec![0.05, 0.0333, 0.025] } else { vec![0.05, 0.025, 0.0125, 0.00625] },
-            overrides: if quick { vec!["time.end=0.3".into()] } else { vec!["time.end=2.0".into()] },
+            spacings: if quick {
+                vec![0.05, 0.0333, 0.025]
+            } else {
+                vec![0.05, 0.025, 0.0125, 0.00625]
+            },
+            overrides: if quick {
+                vec!["time.end=0.3".into()]
+            } else {
+                vec!["time.end=2.0".into()]
+            },
             measure: Measure::Hydrostatic,
         });
     }
     let dam = cases_dir().join("dam_break.json");
     let (base, a) = if dam.exists() {
         let v = read_case_value(&dam)?;
-        let case = case::parse_case_value(v.clone()).map_err(|e| io::Error::new(io::ErrorKind::InvalidData, e.to_string()))?;
-        let a = column_geometry(&case).map(|g| g.width).unwrap_or(reference::KOSHIZUKA_OKA_COLUMN_WIDTH);
+        let case = case::parse_case_value(v.clone())
+            .map_err(|e| io::Error::new(io::ErrorKind::InvalidData, e.to_string()))?;
+        let a = column_geometry(&case)
+            .map(|g| g.width)
+            .unwrap_or(reference::KOSHIZUKA_OKA_COLUMN_WIDTH);
         (v, a)
     } else {
         let a = reference::KOSHIZUKA_OKA_COLUMN_WIDTH;
@@ -175,8 +204,15 @@ pub fn bench_cases(quick: bool) -> io::Result<Vec<BenchCase>> {
     cases.push(BenchCase {
         name: "dam_break",
         base,
-        spacings: if quick { vec![a / 8.0, a / 12.0, a / 16.0] } else { vec![a / 10.0, a / 20.0, a / 30.0, a / 40.0] },
-        overrides: vec![format!("time.end={}", to_time(3.05)), format!("output.snapshot_interval={}", to_time(0.05))],
+        spacings: if quick {
+            vec![a / 8.0, a / 12.0, a / 16.0]
+        } else {
+            vec![a / 10.0, a / 20.0, a / 30.0, a / 40.0]
+        },
+        overrides: vec![
+            format!("time.end={}", to_time(3.05)),
+            format!("output.snapshot_interval={}", to_time(0.05)),
+        ],
         measure: Measure::DamBreak,
     });
     let wedge = cases_dir().join("wedge_30deg_constant_velocity.json");
@@ -184,7 +220,11 @@ pub fn bench_cases(quick: bool) -> io::Result<Vec<BenchCase>> {
         cases.push(BenchCase {
             name: "wedge_30deg",
             base: read_case_value(&wedge)?,
-            spacings: if quick { vec![0.04, 0.03, 0.02] } else { vec![0.02, 0.01, 0.0075, 0.005] },
+            spacings: if quick {
+                vec![0.04, 0.03, 0.02]
+            } else {
+                vec![0.02, 0.01, 0.0075, 0.005]
+            },
             overrides: vec![],
             measure: Measure::Wedge,
         });
@@ -207,11 +247,19 @@ pub fn column_geometry(case: &Case) -> Option<ColumnGeometry> {
     let left = xs.clone().fold(Real::INFINITY, Real::min);
     let right = xs.fold(Real::NEG_INFINITY, Real::max);
     let floor = ys.fold(Real::INFINITY, Real::min);
-    (right > left).then_some(ColumnGeometry { width: right - left, left, floor })
+    (right > left).then_some(ColumnGeometry {
+        width: right - left,
+        left,
+        floor,
+    })
 }
 
 /// Build the case of one run: base + overrides + spacing + variant scheme.
-pub fn run_case_value(bench: &BenchCase, spacing: Real, scheme: &Scheme) -> Result<Case, case::CaseError> {
+pub fn run_case_value(
+    bench: &BenchCase,
+    spacing: Real,
+    scheme: &Scheme,
+) -> Result<Case, case::CaseError> {
     let mut v = bench.base.clone();
     for o in &bench.overrides {
         case::apply_override(&mut v, o)?;
@@ -237,29 +285,56 @@ pub struct RunOutcome {
 
 impl From<&Summary> for RunOutcome {
     fn from(s: &Summary) -> Self {
-        Self { succeeded: s.status == RunStatus::Succeeded, simulated_time: s.simulated_time, particles: s.particles }
+        Self {
+            succeeded: s.status == RunStatus::Succeeded,
+            simulated_time: s.simulated_time,
+            particles: s.particles,
+        }
     }
 }
 
 /// The errors of a finished run in `dir`: (error, measure, error2, measure2, note).
-pub fn score(measure: &Measure, case: &Case, dir: &Path, summary: &RunOutcome) -> io::Result<(Real, String, Real, String, String)> {
+pub fn score(
+    measure: &Measure,
+    case: &Case,
+    dir: &Path,
+    summary: &RunOutcome,
+) -> io::Result<(Real, String, Real, String, String)> {
     match measure {
-        Measure::Hydrostatic if !summary.succeeded => {
-            Ok((Real::NAN, "tank load vs water weight".into(), Real::NAN, "mid-depth probe vs rho g d".into(), String::new()))
-        }
+        Measure::Hydrostatic if !summary.succeeded => Ok((
+            Real::NAN,
+            "tank load vs water weight".into(),
+            Real::NAN,
+            "mid-depth probe vs rho g d".into(),
+            String::new(),
+        )),
         Measure::Hydrostatic => {
             let rows = parse_loads_csv(&std::fs::read_to_string(dir.join("loads.csv"))?)?;
-            let wall = case.walls.first().map(|w| w.name.clone()).unwrap_or_default();
+            let wall = case
+                .walls
+                .first()
+                .map(|w| w.name.clone())
+                .unwrap_or_default();
             let (times, picked) = load_series(&rows, &wall);
             let fy: Vec<Real> = picked.iter().map(|r| r.fy).collect();
             let half = 0.5 * summary.simulated_time;
-            let expected = summary.particles as Real * case.fluid.density * case.particle_spacing.powi(2) * case.fluid.gravity[1];
-            let load_error = measure::interval_mean_after(0.0, &times, &fy, half).map_or(Real::NAN, |m| measure::relative_error(m, expected));
+            let expected = summary.particles as Real
+                * case.fluid.density
+                * case.particle_spacing.powi(2)
+                * case.fluid.gravity[1];
+            let load_error = measure::interval_mean_after(0.0, &times, &fy, half)
+                .map_or(Real::NAN, |m| measure::relative_error(m, expected));
             // probe: rho |g| (top of the fluid - probe height)
             let mut probe_error = Real::NAN;
             let mut note = String::new();
-            if let (Some(probe), Some(block)) = (case.output.probes.first(), case.fluid_blocks.first()) {
-                let top = block.polygon.iter().map(|p| p[1]).fold(Real::NEG_INFINITY, Real::max);
+            if let (Some(probe), Some(block)) =
+                (case.output.probes.first(), case.fluid_blocks.first())
+            {
+                let top = block
+                    .polygon
+                    .iter()
+                    .map(|p| p[1])
+                    .fold(Real::NEG_INFINITY, Real::max);
                 let g = (case.fluid.gravity[0].powi(2) + case.fluid.gravity[1].powi(2)).sqrt();
                 let expected_p = case.fluid.density * g * (top - probe.position[1]);
                 if let Ok(text) = std::fs::read_to_string(dir.join("probes.csv")) {
@@ -270,30 +345,69 @@ pub fn score(measure: &Measure, case: &Case, dir: &Path, summary: &RunOutcome) -
                     }
                 }
             }
-            Ok((load_error, "tank load vs water weight".into(), probe_error, "mid-depth probe vs rho g d".into(), note))
+            Ok((
+                load_error,
+                "tank load vs water weight".into(),
+                probe_error,
+                "mid-depth probe vs rho g d".into(),
+                note,
+            ))
         }
         Measure::DamBreak => {
-            let geometry = column_geometry(case).ok_or_else(|| io::Error::other("dam break without a fluid block"))?;
-            let front = surge_front_history(dir, &geometry, case.particle_spacing, vec_norm(case.fluid.gravity))?;
+            let geometry = column_geometry(case)
+                .ok_or_else(|| io::Error::other("dam break without a fluid block"))?;
+            let front = surge_front_history(
+                dir,
+                &geometry,
+                case.particle_spacing,
+                vec_norm(case.fluid.gravity),
+            )?;
             let error = measure::surge_front_rms_error(&front).unwrap_or(Real::NAN);
-            let last = front.last().map(|(t, z)| format!("front Z = {z:.2} at T = {t:.2}")).unwrap_or_default();
-            Ok((error, "surge front RMS vs Martin & Moyce, 1<=T<=3".into(), Real::NAN, String::new(), last))
+            let last = front
+                .last()
+                .map(|(t, z)| format!("front Z = {z:.2} at T = {t:.2}"))
+                .unwrap_or_default();
+            Ok((
+                error,
+                "surge front RMS vs Martin & Moyce, 1<=T<=3".into(),
+                Real::NAN,
+                String::new(),
+                last,
+            ))
         }
         Measure::Wedge => {
-            let body = case.bodies.first().ok_or_else(|| io::Error::other("wedge case without a body"))?;
+            let body = case
+                .bodies
+                .first()
+                .ok_or_else(|| io::Error::other("wedge case without a body"))?;
             let crate::case::Motion::Prescribed { velocity, .. } = &body.motion else {
-                return Err(io::Error::other("the wedge benchmark needs a prescribed motion"));
+                return Err(io::Error::other(
+                    "the wedge benchmark needs a prescribed motion",
+                ));
             };
             let speed = vec_norm(*velocity);
             let d = [velocity[0] / speed, velocity[1] / speed];
-            let beta = leading_deadrise(&body.polygon, body.angle, *velocity).ok_or_else(|| io::Error::other("no deadrise"))?;
+            let beta = leading_deadrise(&body.polygon, body.angle, *velocity)
+                .ok_or_else(|| io::Error::other("no deadrise"))?;
             // breadth across the motion, keel and free surface along it
             let (s, c) = body.angle.sin_cos();
-            let world: Vec<[Real; 2]> =
-                body.polygon.iter().map(|p| [body.position[0] + c * p[0] - s * p[1], body.position[1] + s * p[0] + c * p[1]]).collect();
+            let world: Vec<[Real; 2]> = body
+                .polygon
+                .iter()
+                .map(|p| {
+                    [
+                        body.position[0] + c * p[0] - s * p[1],
+                        body.position[1] + s * p[0] + c * p[1],
+                    ]
+                })
+                .collect();
             let across: Vec<Real> = world.iter().map(|p| p[0] * d[1] - p[1] * d[0]).collect();
-            let breadth = across.iter().cloned().fold(Real::NEG_INFINITY, Real::max) - across.iter().cloned().fold(Real::INFINITY, Real::min);
-            let keel = world.iter().map(|p| p[0] * d[0] + p[1] * d[1]).fold(Real::NEG_INFINITY, Real::max);
+            let breadth = across.iter().cloned().fold(Real::NEG_INFINITY, Real::max)
+                - across.iter().cloned().fold(Real::INFINITY, Real::min);
+            let keel = world
+                .iter()
+                .map(|p| p[0] * d[0] + p[1] * d[1])
+                .fold(Real::NEG_INFINITY, Real::max);
             let surface = case
                 .fluid_blocks
                 .iter()
@@ -304,17 +418,45 @@ pub fn score(measure: &Measure, case: &Case, dir: &Path, summary: &RunOutcome) -
             let window = (contact + 0.25 * t_chine, contact + 0.85 * t_chine);
             let rows = parse_loads_csv(&std::fs::read_to_string(dir.join("loads.csv"))?)?;
             let (times, picked) = load_series(&rows, &body.name);
-            let force: Vec<Real> = picked.iter().map(|r| -(r.fx * d[0] + r.fy * d[1])).collect();
+            let force: Vec<Real> = picked
+                .iter()
+                .map(|r| -(r.fx * d[0] + r.fy * d[1]))
+                .collect();
             let covered = times.last().is_some_and(|t| *t >= window.1);
-            let fit = measure::fit_force_coefficient(0.0, &times, &force, window, case.fluid.density, speed).filter(|_| covered);
+            let fit = measure::fit_force_coefficient(
+                0.0,
+                &times,
+                &force,
+                window,
+                case.fluid.density,
+                speed,
+            )
+            .filter(|_| covered);
             let (error, note) = match fit {
                 Some((cf, t0)) => (
                     measure::relative_error(cf, reference::WEDGE_30_FORCE_COEFFICIENT),
-                    format!("C_F = {cf:.2} (t0 = {:.2} ms; Wagner {:.2})", t0 * 1e3, reference::wagner_force_coefficient(beta)),
+                    format!(
+                        "C_F = {cf:.2} (t0 = {:.2} ms; Wagner {:.2})",
+                        t0 * 1e3,
+                        reference::wagner_force_coefficient(beta)
+                    ),
                 ),
-                None => (Real::NAN, format!("the loads do not cover the self-similar window {:.2}-{:.2} ms", window.0 * 1e3, window.1 * 1e3)),
+                None => (
+                    Real::NAN,
+                    format!(
+                        "the loads do not cover the self-similar window {:.2}-{:.2} ms",
+                        window.0 * 1e3,
+                        window.1 * 1e3
+                    ),
+                ),
             };
-            Ok((error, "C_F vs similarity solution 14.04".into(), Real::NAN, String::new(), note))
+            Ok((
+                error,
+                "C_F vs similarity solution 14.04".into(),
+                Real::NAN,
+                String::new(),
+                note,
+            ))
         }
     }
 }
@@ -328,7 +470,10 @@ fn probe_series(text: &str, name: &str) -> (Vec<Real>, Vec<Real>) {
     let (mut t, mut p) = (Vec::new(), Vec::new());
     for record in reader.records().flatten() {
         if record.get(1) == Some(name) {
-            if let (Some(Ok(a)), Some(Ok(b))) = (record.get(0).map(str::parse::<Real>), record.get(2).map(str::parse::<Real>)) {
+            if let (Some(Ok(a)), Some(Ok(b))) = (
+                record.get(0).map(str::parse::<Real>),
+                record.get(2).map(str::parse::<Real>),
+            ) {
                 t.push(a);
                 p.push(b);
             }
@@ -338,7 +483,12 @@ fn probe_series(text: &str, name: &str) -> (Vec<Real>, Vec<Real>) {
 }
 
 /// (T, Z) of the surge front read from the run's VTK snapshots.
-pub fn surge_front_history(dir: &Path, geometry: &ColumnGeometry, l0: Real, g: Real) -> io::Result<Vec<(Real, Real)>> {
+pub fn surge_front_history(
+    dir: &Path,
+    geometry: &ColumnGeometry,
+    l0: Real,
+    g: Real,
+) -> io::Result<Vec<(Real, Real)>> {
     let snapshots = dir.join(SNAPSHOT_DIR);
     let entries = parse_pvd(&std::fs::read_to_string(snapshots.join(PVD_NAME))?)?;
     let band = (2.0 * l0).max(0.05 * geometry.width);
@@ -356,7 +506,12 @@ pub fn surge_front_history(dir: &Path, geometry: &ColumnGeometry, l0: Real, g: R
 
 /// Run one case at one spacing with one variant and score it. Never panics: a panic in
 /// the engine is caught and reported as a failed run.
-pub fn run_one(bench: &BenchCase, variant: &Variant, spacing: Real, runs_dir: &Path) -> BenchResult {
+pub fn run_one(
+    bench: &BenchCase,
+    variant: &Variant,
+    spacing: Real,
+    runs_dir: &Path,
+) -> BenchResult {
     let mut result = BenchResult {
         case: bench.name.to_string(),
         variant: variant.name.to_string(),
@@ -379,9 +534,14 @@ pub fn run_one(bench: &BenchCase, variant: &Variant, spacing: Real, runs_dir: &P
             return result;
         }
     };
-    let dir = runs_dir.join(bench.name).join(variant.name).join(format!("l0_{spacing:.6}"));
+    let dir = runs_dir
+        .join(bench.name)
+        .join(variant.name)
+        .join(format!("l0_{spacing:.6}"));
     let started = Instant::now();
-    let outcome = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| run::run_case(&case, &dir, &mut run::Quiet)));
+    let outcome = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
+        run::run_case(&case, &dir, &mut run::Quiet)
+    }));
     let summary = match outcome {
         Ok(Ok(s)) => s,
         Ok(Err(e)) => {
@@ -389,7 +549,10 @@ pub fn run_one(bench: &BenchCase, variant: &Variant, spacing: Real, runs_dir: &P
             return result;
         }
         Err(panic) => {
-            let what = panic.downcast_ref::<String>().cloned().or_else(|| panic.downcast_ref::<&str>().map(|s| s.to_string()));
+            let what = panic
+                .downcast_ref::<String>()
+                .cloned()
+                .or_else(|| panic.downcast_ref::<&str>().map(|s| s.to_string()));
             result.note = format!("panicked: {}", what.unwrap_or_default());
             result.wall_time_s = started.elapsed().as_secs_f64();
             return result;
@@ -407,7 +570,11 @@ pub fn run_one(bench: &BenchCase, variant: &Variant, spacing: Real, runs_dir: &P
     .into();
     // a run that failed is still scored on what it wrote: the measures return NaN when
     // the outputs do not cover the comparison window (the status column says it failed)
-    let reason = summary.reason.clone().map(|r| format!("{r}; ")).unwrap_or_default();
+    let reason = summary
+        .reason
+        .clone()
+        .map(|r| format!("{r}; "))
+        .unwrap_or_default();
     match score(&bench.measure, &case, &dir, &RunOutcome::from(&summary)) {
         Ok((e1, m1, e2, m2, note)) => {
             result.error = e1;
@@ -446,7 +613,14 @@ pub fn run(options: BenchOptions) -> io::Result<()> {
         stress = report::cfl_sweep(&cases, &runs_dir.join("stress"));
     }
     let total = started.elapsed().as_secs_f64();
-    report::write_report(&options.out_dir, &cases, &results, &stress, options.quick, total)?;
+    report::write_report(
+        &options.out_dir,
+        &cases,
+        &results,
+        &stress,
+        options.quick,
+        total,
+    )?;
     if options.operators {
         report::write_operators(&options.out_dir)?;
     }

@@ -177,12 +177,22 @@ impl StudiedOperator {
         let snake = |s: String| s.trim_matches('"').to_string();
         match self {
             // evaluated in its linear form (see `relative_error`)
-            StudiedOperator::Gradient(GradientKind::MinimumPressure | GradientKind::Cmps) => "gradient/classic (eq. 13)".into(),
-            StudiedOperator::Gradient(k) => format!("gradient/{}", snake(serde_json::to_string(&k).unwrap_or_default())),
-            StudiedOperator::Laplacian(k) => format!("laplacian/{}", snake(serde_json::to_string(&k).unwrap_or_default())),
+            StudiedOperator::Gradient(GradientKind::MinimumPressure | GradientKind::Cmps) => {
+                "gradient/classic (eq. 13)".into()
+            }
+            StudiedOperator::Gradient(k) => format!(
+                "gradient/{}",
+                snake(serde_json::to_string(&k).unwrap_or_default())
+            ),
+            StudiedOperator::Laplacian(k) => format!(
+                "laplacian/{}",
+                snake(serde_json::to_string(&k).unwrap_or_default())
+            ),
             StudiedOperator::RegularSecondDerivative => "second_derivative/regular (eq. 26)".into(),
             StudiedOperator::MixedDerivative => "second_derivative/mixed (eq. 27)".into(),
-            StudiedOperator::AnisotropicSecondDerivative => "second_derivative/anisotropic (eq. 29)".into(),
+            StudiedOperator::AnisotropicSecondDerivative => {
+                "second_derivative/anisotropic (eq. 29)".into()
+            }
         }
     }
 
@@ -212,27 +222,31 @@ impl StudiedOperator {
 /// is evaluated in its linear form Σ g_ij f_ij (paper 000 eq. 13; the minimum-pressure
 /// shift is a stabiliser, not part of the consistency study); classic, second-order and
 /// HL/CHL Laplacians use the particle's own n_i, λ_i as paper 000 §3.1 does.
-pub fn relative_error(op: StudiedOperator, field: Field, positions: &[Vec2], inside: &[usize], re: Real) -> Real {
+pub fn relative_error(
+    op: StudiedOperator,
+    field: Field,
+    positions: &[Vec2],
+    inside: &[usize],
+    re: Real,
+) -> Real {
     let nb = NeighborList::build(positions, re);
     let cloud = Cloud::new(positions, &nb, re);
     let f: Vec<Real> = positions.iter().map(|&p| field.value(p)).collect();
     let m = field.max_profile();
     let norm = Normalisation::Local;
     let errors: Vec<Real> = match op {
-        StudiedOperator::Gradient(kind) => {
-            inside
-                .iter()
-                .map(|&i| {
-                    let row = if kind == GradientKind::MinimumPressure {
-                        classic_gradient_row(&cloud, i)
-                    } else {
-                        operators::gradient_row::<Koshizuka>(kind, &cloud, norm, i)
-                    };
-                    let g: Vec2 = row.iter().map(|&(j, c)| c * (f[j] - f[i])).sum();
-                    (g - field.gradient(positions[i])).norm() / (m * 5.0_f64.sqrt())
-                })
-                .collect()
-        }
+        StudiedOperator::Gradient(kind) => inside
+            .iter()
+            .map(|&i| {
+                let row = if kind == GradientKind::MinimumPressure {
+                    classic_gradient_row(&cloud, i)
+                } else {
+                    operators::gradient_row::<Koshizuka>(kind, &cloud, norm, i)
+                };
+                let g: Vec2 = row.iter().map(|&(j, c)| c * (f[j] - f[i])).sum();
+                (g - field.gradient(positions[i])).norm() / (m * 5.0_f64.sqrt())
+            })
+            .collect(),
         StudiedOperator::Laplacian(kind) => inside
             .iter()
             .map(|&i| {
@@ -256,7 +270,10 @@ pub fn relative_error(op: StudiedOperator, field: Field, positions: &[Vec2], ins
         }
         StudiedOperator::MixedDerivative => {
             let d = operators::second_derivatives::<Koshizuka>(&cloud, &f);
-            inside.iter().map(|&i| (d[i].xy - field.hessian(positions[i]).2).abs() / (2.0 * m)).collect()
+            inside
+                .iter()
+                .map(|&i| (d[i].xy - field.hessian(positions[i]).2).abs() / (2.0 * m))
+                .collect()
         }
     };
     errors.iter().sum::<Real>() / errors.len().max(1) as Real
@@ -268,37 +285,62 @@ fn classic_gradient_row(cloud: &Cloud, i: usize) -> Vec<(usize, Vec2)> {
 
 /// Least-squares slope of ln(error) against ln(dx).
 pub fn fitted_order(points: &[(Real, Real)]) -> Real {
-    let pts: Vec<(Real, Real)> = points.iter().filter(|(_, e)| *e > 0.0).map(|&(h, e)| (h.ln(), e.ln())).collect();
+    let pts: Vec<(Real, Real)> = points
+        .iter()
+        .filter(|(_, e)| *e > 0.0)
+        .map(|&(h, e)| (h.ln(), e.ln()))
+        .collect();
     let n = pts.len() as Real;
     if pts.len() < 2 {
         return Real::NAN;
     }
-    let (mx, my) = (pts.iter().map(|p| p.0).sum::<Real>() / n, pts.iter().map(|p| p.1).sum::<Real>() / n);
+    let (mx, my) = (
+        pts.iter().map(|p| p.0).sum::<Real>() / n,
+        pts.iter().map(|p| p.1).sum::<Real>() / n,
+    );
     let sxy: Real = pts.iter().map(|p| (p.0 - mx) * (p.1 - my)).sum();
     let sxx: Real = pts.iter().map(|p| (p.0 - mx).powi(2)).sum();
     sxy / sxx
 }
 
 /// The rows of one operator, field and lattice over [`SPACINGS`].
-pub fn convergence_rows(op: StudiedOperator, field: Field, kind: LatticeKind) -> Vec<ConvergenceRow> {
+pub fn convergence_rows(
+    op: StudiedOperator,
+    field: Field,
+    kind: LatticeKind,
+) -> Vec<ConvergenceRow> {
     let errors: Vec<(Real, Real)> = SPACINGS
         .iter()
         .map(|&dx| {
             let (pos, inside) = lattice(kind, dx, PERTURBATION_SEED);
-            (dx, relative_error(op, field, &pos, &inside, RADIUS_RATIO * dx))
+            (
+                dx,
+                relative_error(op, field, &pos, &inside, RADIUS_RATIO * dx),
+            )
         })
         .collect();
     let order = fitted_order(&errors);
     errors
         .into_iter()
-        .map(|(dx, error)| ConvergenceRow { variant: op.name(), field: field.name().into(), lattice: kind.name().into(), dx, error, order })
+        .map(|(dx, error)| ConvergenceRow {
+            variant: op.name(),
+            field: field.name().into(),
+            lattice: kind.name().into(),
+            dx,
+            error,
+            order,
+        })
         .collect()
 }
 
 /// The whole table: every operator, both fields, the three distributions.
 pub fn convergence_table() -> Vec<ConvergenceRow> {
     let mut rows = Vec::new();
-    for kind in [LatticeKind::Regular, LatticeKind::Perturbed, LatticeKind::Anisotropic] {
+    for kind in [
+        LatticeKind::Regular,
+        LatticeKind::Perturbed,
+        LatticeKind::Anisotropic,
+    ] {
         for field in Field::ALL {
             for op in StudiedOperator::all() {
                 rows.extend(convergence_rows(op, field, kind));
@@ -312,7 +354,15 @@ pub fn convergence_table() -> Vec<ConvergenceRow> {
 pub fn convergence_markdown(rows: &[ConvergenceRow]) -> String {
     let mut s = String::from("| variant | field | lattice | dx | E_D | fitted order |\n| --- | --- | --- | --- | --- | --- |\n");
     for r in rows {
-        s.push_str(&format!("| {} | {} | {} | 2^{} | {:.3e} | {:.2} |\n", r.variant, r.field, r.lattice, r.dx.log2().round() as i64, r.error, r.order));
+        s.push_str(&format!(
+            "| {} | {} | {} | 2^{} | {:.3e} | {:.2} |\n",
+            r.variant,
+            r.field,
+            r.lattice,
+            r.dx.log2().round() as i64,
+            r.error,
+            r.order
+        ));
     }
     s
 }

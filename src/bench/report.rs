@@ -53,7 +53,12 @@ pub fn pareto_front(results: &[&BenchResult]) -> Vec<usize> {
         .filter(|&i| ok(results[i]))
         .filter(|&i| {
             let a = results[i];
-            !results.iter().any(|b| ok(b) && b.wall_time_s <= a.wall_time_s && b.error <= a.error && (b.wall_time_s < a.wall_time_s || b.error < a.error))
+            !results.iter().any(|b| {
+                ok(b)
+                    && b.wall_time_s <= a.wall_time_s
+                    && b.error <= a.error
+                    && (b.wall_time_s < a.wall_time_s || b.error < a.error)
+            })
         })
         .collect();
     front.sort_by(|&a, &b| results[a].wall_time_s.total_cmp(&results[b].wall_time_s));
@@ -62,11 +67,19 @@ pub fn pareto_front(results: &[&BenchResult]) -> Vec<usize> {
 
 /// The shortest wall time of a run with error at most `threshold`, and its variant.
 pub fn time_to_reach<'a>(results: &[&'a BenchResult], threshold: Real) -> Option<&'a BenchResult> {
-    results.iter().copied().filter(|r| r.error.is_finite() && r.error <= threshold).min_by(|a, b| a.wall_time_s.total_cmp(&b.wall_time_s))
+    results
+        .iter()
+        .copied()
+        .filter(|r| r.error.is_finite() && r.error <= threshold)
+        .min_by(|a, b| a.wall_time_s.total_cmp(&b.wall_time_s))
 }
 
 fn fmt_err(e: Real) -> String {
-    if e.is_finite() { format!("{:.2}%", 100.0 * e) } else { "—".into() }
+    if e.is_finite() {
+        format!("{:.2}%", 100.0 * e)
+    } else {
+        "—".into()
+    }
 }
 
 /// One row of the CFL sweep.
@@ -83,16 +96,36 @@ pub struct StressRow {
 /// which complete (with a measurable front).
 pub fn cfl_sweep(cases: &[BenchCase], dir: &Path) -> Vec<StressRow> {
     let mut rows = Vec::new();
-    let Some(dam) = cases.iter().find(|c| matches!(c.measure, Measure::DamBreak)) else { return rows };
+    let Some(dam) = cases
+        .iter()
+        .find(|c| matches!(c.measure, Measure::DamBreak))
+    else {
+        return rows;
+    };
     let spacing = dam.spacings[0];
     for variant in variants() {
         for cfl in [0.1, 0.2, 0.4, 0.8] {
-            let mut case = BenchCase { name: dam.name, base: dam.base.clone(), spacings: vec![spacing], overrides: dam.overrides.clone(), measure: Measure::DamBreak };
+            let mut case = BenchCase {
+                name: dam.name,
+                base: dam.base.clone(),
+                spacings: vec![spacing],
+                overrides: dam.overrides.clone(),
+                measure: Measure::DamBreak,
+            };
             case.overrides.push(format!("time.cfl={cfl}"));
             case.overrides.push("time.max_dt=0.01".into());
             let r = run_one(&case, &variant, spacing, &dir.join(format!("cfl_{cfl}")));
-            eprintln!("stress dam_break {:<14} cfl {cfl:<4} {} error {:.3e} {}", variant.name, r.status, r.error, r.note);
-            rows.push(StressRow { variant: variant.name.into(), cfl, completed: r.status == "succeeded" && r.error.is_finite(), error: r.error, note: r.note });
+            eprintln!(
+                "stress dam_break {:<14} cfl {cfl:<4} {} error {:.3e} {}",
+                variant.name, r.status, r.error, r.note
+            );
+            rows.push(StressRow {
+                variant: variant.name.into(),
+                cfl,
+                completed: r.status == "succeeded" && r.error.is_finite(),
+                error: r.error,
+                note: r.note,
+            });
         }
     }
     rows
@@ -127,12 +160,30 @@ pub fn write_report(
         if rows.is_empty() {
             continue;
         }
-        let measure = rows.iter().find(|r| !r.error_measure.is_empty()).map(|r| r.error_measure.clone()).unwrap_or_default();
-        let measure2 = rows.iter().find(|r| !r.error2_measure.is_empty()).map(|r| r.error2_measure.clone());
+        let measure = rows
+            .iter()
+            .find(|r| !r.error_measure.is_empty())
+            .map(|r| r.error_measure.clone())
+            .unwrap_or_default();
+        let measure2 = rows
+            .iter()
+            .find(|r| !r.error2_measure.is_empty())
+            .map(|r| r.error2_measure.clone());
         let _ = writeln!(md, "## {}\n", case.name);
-        let _ = writeln!(md, "Error: {measure}.{}\n", measure2.as_ref().map(|m| format!(" Second error: {m}.")).unwrap_or_default());
+        let _ = writeln!(
+            md,
+            "Error: {measure}.{}\n",
+            measure2
+                .as_ref()
+                .map(|m| format!(" Second error: {m}."))
+                .unwrap_or_default()
+        );
         let _ = writeln!(md, "| variant | spacing (m) | particles | steps | wall time (s) | error | {}status | note |", if measure2.is_some() { "error 2 | " } else { "" });
-        let _ = writeln!(md, "| --- | ---: | ---: | ---: | ---: | ---: | {}--- | --- |", if measure2.is_some() { "---: | " } else { "" });
+        let _ = writeln!(
+            md,
+            "| --- | ---: | ---: | ---: | ---: | ---: | {}--- | --- |",
+            if measure2.is_some() { "---: | " } else { "" }
+        );
         for r in &rows {
             let _ = writeln!(
                 md,
@@ -143,7 +194,11 @@ pub fn write_report(
                 r.steps,
                 r.wall_time_s,
                 fmt_err(r.error),
-                if measure2.is_some() { format!("{} | ", fmt_err(r.error2)) } else { String::new() },
+                if measure2.is_some() {
+                    format!("{} | ", fmt_err(r.error2))
+                } else {
+                    String::new()
+                },
                 r.status,
                 r.note.replace('|', "/")
             );
@@ -157,13 +212,19 @@ pub fn write_report(
             .map(|v| Series {
                 name: v.name.to_string(),
                 points: {
-                    let mut mine: Vec<&&BenchResult> = rows.iter().filter(|r| r.variant == v.name).collect();
+                    let mut mine: Vec<&&BenchResult> =
+                        rows.iter().filter(|r| r.variant == v.name).collect();
                     mine.sort_by(|a, b| b.spacing.total_cmp(&a.spacing));
                     mine.iter().map(|r| (r.wall_time_s, r.error)).collect()
                 },
             })
             .collect();
-        match log_log_svg(&format!("{}: error against wall time", case.name), "wall time (s)", "relative error", &series) {
+        match log_log_svg(
+            &format!("{}: error against wall time", case.name),
+            "wall time (s)",
+            "relative error",
+            &series,
+        ) {
             Ok(svg) => {
                 std::fs::write(out_dir.join(format!("{}.svg", case.name)), svg)?;
                 let _ = writeln!(md, "![{0}]({0}.svg)\n", case.name);
@@ -175,14 +236,34 @@ pub fn write_report(
     }
     if !stress.is_empty() {
         let _ = writeln!(md, "## Stability: CFL sweep of the dam break\n");
-        let _ = writeln!(md, "| variant | CFL | completed | error | note |\n| --- | ---: | --- | ---: | --- |");
+        let _ = writeln!(
+            md,
+            "| variant | CFL | completed | error | note |\n| --- | ---: | --- | ---: | --- |"
+        );
         for s in stress {
-            let _ = writeln!(md, "| {} | {} | {} | {} | {} |", s.variant, s.cfl, s.completed, fmt_err(s.error), s.note.replace('|', "/"));
+            let _ = writeln!(
+                md,
+                "| {} | {} | {} | {} | {} |",
+                s.variant,
+                s.cfl,
+                s.completed,
+                fmt_err(s.error),
+                s.note.replace('|', "/")
+            );
         }
         md.push('\n');
         for v in variants() {
-            let stable = stress.iter().filter(|s| s.variant == v.name && s.completed).map(|s| s.cfl).fold(None, |a: Option<Real>, c| Some(a.map_or(c, |a| a.max(c))));
-            let _ = writeln!(md, "- `{}`: largest completing CFL {}", v.name, stable.map_or("none".to_string(), |c| c.to_string()));
+            let stable = stress
+                .iter()
+                .filter(|s| s.variant == v.name && s.completed)
+                .map(|s| s.cfl)
+                .fold(None, |a: Option<Real>, c| Some(a.map_or(c, |a| a.max(c))));
+            let _ = writeln!(
+                md,
+                "- `{}`: largest completing CFL {}",
+                v.name,
+                stable.map_or("none".to_string(), |c| c.to_string())
+            );
         }
         md.push('\n');
     }
@@ -194,12 +275,19 @@ pub fn interpretation(rows: &[&BenchResult]) -> String {
     let mut md = String::new();
     let failed = rows.iter().filter(|r| r.status != "succeeded").count();
     if failed > 0 {
-        let _ = writeln!(md, "- {failed} of {} runs did not complete (see the notes).", rows.len());
+        let _ = writeln!(
+            md,
+            "- {failed} of {} runs did not complete (see the notes).",
+            rows.len()
+        );
     }
     let mut names: Vec<&str> = rows.iter().map(|r| r.variant.as_str()).collect();
     names.dedup();
     for name in &names {
-        let mut mine: Vec<&&BenchResult> = rows.iter().filter(|r| r.variant == *name && r.error.is_finite()).collect();
+        let mut mine: Vec<&&BenchResult> = rows
+            .iter()
+            .filter(|r| r.variant == *name && r.error.is_finite())
+            .collect();
         mine.sort_by(|a, b| b.spacing.total_cmp(&a.spacing));
         if mine.len() >= 2 {
             let trend = if mine.windows(2).all(|w| w[1].error <= w[0].error) {
@@ -229,12 +317,24 @@ pub fn interpretation(rows: &[&BenchResult]) -> String {
             let pairs: Vec<(&&BenchResult, &&BenchResult)> = rows
                 .iter()
                 .filter(|r| r.variant == *a)
-                .filter_map(|r| rows.iter().find(|q| q.variant == *b && q.spacing == r.spacing).map(|q| (r, q)))
+                .filter_map(|r| {
+                    rows.iter()
+                        .find(|q| q.variant == *b && q.spacing == r.spacing)
+                        .map(|q| (r, q))
+                })
                 .collect();
             let same = !pairs.is_empty()
-                && pairs.iter().all(|(r, q)| r.error.is_finite() && q.error.is_finite() && (r.error - q.error).abs() <= 1e-6 * q.error.abs());
+                && pairs.iter().all(|(r, q)| {
+                    r.error.is_finite()
+                        && q.error.is_finite()
+                        && (r.error - q.error).abs() <= 1e-6 * q.error.abs()
+                });
             if same {
-                let ratio = pairs.iter().map(|(r, q)| r.wall_time_s / q.wall_time_s).sum::<f64>() / pairs.len() as f64;
+                let ratio = pairs
+                    .iter()
+                    .map(|(r, q)| r.wall_time_s / q.wall_time_s)
+                    .sum::<f64>()
+                    / pairs.len() as f64;
                 let _ = writeln!(
                     md,
                     "- `{a}` gives the errors of `{b}` to 1e-6 at every spacing: the engine does not distinguish them here; it costs {ratio:.1}× the wall time."
@@ -245,14 +345,35 @@ pub fn interpretation(rows: &[&BenchResult]) -> String {
     }
     let front = pareto_front(rows);
     if !front.is_empty() {
-        let list: Vec<String> =
-            front.iter().map(|&i| format!("`{}` l0 = {:.4} ({:.2} s, {})", rows[i].variant, rows[i].spacing, rows[i].wall_time_s, fmt_err(rows[i].error))).collect();
-        let _ = writeln!(md, "- Pareto front (fastest to most accurate): {}.", list.join("; "));
+        let list: Vec<String> = front
+            .iter()
+            .map(|&i| {
+                format!(
+                    "`{}` l0 = {:.4} ({:.2} s, {})",
+                    rows[i].variant,
+                    rows[i].spacing,
+                    rows[i].wall_time_s,
+                    fmt_err(rows[i].error)
+                )
+            })
+            .collect();
+        let _ = writeln!(
+            md,
+            "- Pareto front (fastest to most accurate): {}.",
+            list.join("; ")
+        );
     }
     for threshold in [0.05, 0.02] {
         match time_to_reach(rows, threshold) {
             Some(r) => {
-                let _ = writeln!(md, "- Cheapest run within {:.0}%: `{}` at l0 = {:.4}, {:.2} s.", threshold * 100.0, r.variant, r.spacing, r.wall_time_s);
+                let _ = writeln!(
+                    md,
+                    "- Cheapest run within {:.0}%: `{}` at l0 = {:.4}, {:.2} s.",
+                    threshold * 100.0,
+                    r.variant,
+                    r.spacing,
+                    r.wall_time_s
+                );
             }
             None => {
                 let _ = writeln!(md, "- No run reached {:.0}%.", threshold * 100.0);

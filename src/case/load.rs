@@ -19,7 +19,8 @@ pub fn load_case_file(path: &Path, overrides: &[String]) -> Result<Case, CaseErr
 
 /// Parse a case from JSON text.
 pub fn parse_case_str(text: &str) -> Result<Case, CaseError> {
-    let value: Value = serde_json::from_str(text).map_err(|e| CaseError::new("", format!("invalid JSON: {e}")))?;
+    let value: Value =
+        serde_json::from_str(text).map_err(|e| CaseError::new("", format!("invalid JSON: {e}")))?;
     parse_case_value(value)
 }
 
@@ -43,7 +44,8 @@ pub fn apply_override(value: &mut Value, assignment: &str) -> Result<(), CaseErr
     if path.is_empty() {
         return Err(CaseError::new("", "empty override path"));
     }
-    let new_value: Value = serde_json::from_str(raw.trim()).unwrap_or_else(|_| Value::String(raw.trim().to_string()));
+    let new_value: Value =
+        serde_json::from_str(raw.trim()).unwrap_or_else(|_| Value::String(raw.trim().to_string()));
     let normalized = path.replace('[', ".").replace(']', "");
     let keys: Vec<&str> = normalized.split('.').filter(|k| !k.is_empty()).collect();
     let mut cursor = value;
@@ -56,23 +58,29 @@ pub fn apply_override(value: &mut Value, assignment: &str) -> Result<(), CaseErr
                     map.insert((*key).to_string(), new_value);
                     return Ok(());
                 }
-                map.entry((*key).to_string()).or_insert_with(|| Value::Object(Default::default()))
+                map.entry((*key).to_string())
+                    .or_insert_with(|| Value::Object(Default::default()))
             }
             Value::Array(items) => {
                 let index: usize = key
                     .parse()
                     .map_err(|_| CaseError::new(here.clone(), "expected an array index"))?;
                 let len = items.len();
-                let slot = items
-                    .get_mut(index)
-                    .ok_or_else(|| CaseError::new(here.clone(), format!("index out of range (length {len})")))?;
+                let slot = items.get_mut(index).ok_or_else(|| {
+                    CaseError::new(here.clone(), format!("index out of range (length {len})"))
+                })?;
                 if last {
                     *slot = new_value;
                     return Ok(());
                 }
                 slot
             }
-            _ => return Err(CaseError::new(here, "cannot set a field inside a number, string or null")),
+            _ => {
+                return Err(CaseError::new(
+                    here,
+                    "cannot set a field inside a number, string or null",
+                ))
+            }
         };
     }
     Ok(())

@@ -5,8 +5,8 @@
 //! silently ignored.
 
 mod load;
-mod scheme;
 pub mod schema;
+mod scheme;
 mod validate;
 
 pub use load::{apply_override, load_case_file, parse_case_str, parse_case_value};
@@ -29,7 +29,10 @@ pub struct CaseError {
 
 impl CaseError {
     pub fn new(path: impl Into<String>, message: impl Into<String>) -> Self {
-        Self { path: path.into(), message: message.into() }
+        Self {
+            path: path.into(),
+            message: message.into(),
+        }
     }
 }
 
@@ -102,7 +105,11 @@ fn default_gravity() -> Point {
 
 impl Default for Fluid {
     fn default() -> Self {
-        Self { density: default_density(), kinematic_viscosity: default_viscosity(), gravity: default_gravity() }
+        Self {
+            density: default_density(),
+            kinematic_viscosity: default_viscosity(),
+            gravity: default_gravity(),
+        }
     }
 }
 
@@ -256,7 +263,12 @@ fn default_load_interval() -> Option<f64> {
 
 impl Default for Output {
     fn default() -> Self {
-        Self { load_interval: default_load_interval(), snapshot_interval: None, probes: Vec::new(), filter_window: None }
+        Self {
+            load_interval: default_load_interval(),
+            snapshot_interval: None,
+            probes: Vec::new(),
+            filter_window: None,
+        }
     }
 }
 

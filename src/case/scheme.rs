@@ -68,7 +68,12 @@ impl LaplacianKind {
     /// CHL, the anisotropic and the least-squares operators build each row from the
     /// particle's own corrective or moment matrix: non-symmetric.
     pub fn is_symmetric(self) -> bool {
-        !matches!(self, LaplacianKind::CorrectedHigherOrder | LaplacianKind::Anisotropic | LaplacianKind::LeastSquares)
+        !matches!(
+            self,
+            LaplacianKind::CorrectedHigherOrder
+                | LaplacianKind::Anisotropic
+                | LaplacianKind::LeastSquares
+        )
     }
 }
 
@@ -205,7 +210,9 @@ impl Scheme {
     /// solved with BiCGSTAB instead (CG needs a symmetric matrix); the run summary
     /// reports this resolved scheme.
     pub fn resolved(mut self) -> Self {
-        if !self.laplacian.is_symmetric() && matches!(self.solver, SolverKind::PcgJacobi | SolverKind::PcgIc0) {
+        if !self.laplacian.is_symmetric()
+            && matches!(self.solver, SolverKind::PcgJacobi | SolverKind::PcgIc0)
+        {
             self.solver = SolverKind::Bicgstab;
         }
         self

@@ -32,7 +32,9 @@ pub struct Limits {
 
 impl Default for Limits {
     fn default() -> Self {
-        Self { max_particles: 2_000_000 }
+        Self {
+            max_particles: 2_000_000,
+        }
     }
 }
 
@@ -68,7 +70,11 @@ pub fn estimated_particles(case: &Case) -> Option<f64> {
     if !(l0.is_finite() && l0 > 0.0) {
         return None;
     }
-    let area: f64 = case.fluid_blocks.iter().map(|b| signed_area(&points(&b.polygon)).abs()).sum();
+    let area: f64 = case
+        .fluid_blocks
+        .iter()
+        .map(|b| signed_area(&points(&b.polygon)).abs())
+        .sum();
     Some(area / (l0 * l0))
 }
 
@@ -80,7 +86,10 @@ fn points(p: &[Point]) -> Vec<Vec2> {
 // 1. finite numbers everywhere
 
 fn check_finite(case: &Case) -> Check {
-    let mut finder = FiniteCheck { path: Vec::new(), found: None };
+    let mut finder = FiniteCheck {
+        path: Vec::new(),
+        found: None,
+    };
     // the serializer itself never fails: errors only stop the walk early
     let _ = case.serialize(&mut finder);
     match finder.found {
@@ -203,10 +212,19 @@ impl<'a> ser::Serializer for &'a mut FiniteCheck {
     fn serialize_unit_struct(self, _name: &'static str) -> Result<(), Stop> {
         Ok(())
     }
-    fn serialize_unit_variant(self, _n: &'static str, _i: u32, _v: &'static str) -> Result<(), Stop> {
+    fn serialize_unit_variant(
+        self,
+        _n: &'static str,
+        _i: u32,
+        _v: &'static str,
+    ) -> Result<(), Stop> {
         Ok(())
     }
-    fn serialize_newtype_struct<T: ?Sized + Serialize>(self, _n: &'static str, value: &T) -> Result<(), Stop> {
+    fn serialize_newtype_struct<T: ?Sized + Serialize>(
+        self,
+        _n: &'static str,
+        value: &T,
+    ) -> Result<(), Stop> {
         value.serialize(self)
     }
     fn serialize_newtype_variant<T: ?Sized + Serialize>(
@@ -219,13 +237,25 @@ impl<'a> ser::Serializer for &'a mut FiniteCheck {
         self.nested(Segment::Field(variant), value)
     }
     fn serialize_seq(self, _len: Option<usize>) -> Result<Compound<'a>, Stop> {
-        Ok(Compound { outer: self, index: 0, key: None })
+        Ok(Compound {
+            outer: self,
+            index: 0,
+            key: None,
+        })
     }
     fn serialize_tuple(self, _len: usize) -> Result<Compound<'a>, Stop> {
-        Ok(Compound { outer: self, index: 0, key: None })
+        Ok(Compound {
+            outer: self,
+            index: 0,
+            key: None,
+        })
     }
     fn serialize_tuple_struct(self, _n: &'static str, _len: usize) -> Result<Compound<'a>, Stop> {
-        Ok(Compound { outer: self, index: 0, key: None })
+        Ok(Compound {
+            outer: self,
+            index: 0,
+            key: None,
+        })
     }
     fn serialize_tuple_variant(
         self,
@@ -234,13 +264,25 @@ impl<'a> ser::Serializer for &'a mut FiniteCheck {
         _v: &'static str,
         _len: usize,
     ) -> Result<Compound<'a>, Stop> {
-        Ok(Compound { outer: self, index: 0, key: None })
+        Ok(Compound {
+            outer: self,
+            index: 0,
+            key: None,
+        })
     }
     fn serialize_map(self, _len: Option<usize>) -> Result<Compound<'a>, Stop> {
-        Ok(Compound { outer: self, index: 0, key: None })
+        Ok(Compound {
+            outer: self,
+            index: 0,
+            key: None,
+        })
     }
     fn serialize_struct(self, _n: &'static str, _len: usize) -> Result<Compound<'a>, Stop> {
-        Ok(Compound { outer: self, index: 0, key: None })
+        Ok(Compound {
+            outer: self,
+            index: 0,
+            key: None,
+        })
     }
     fn serialize_struct_variant(
         self,
@@ -249,7 +291,11 @@ impl<'a> ser::Serializer for &'a mut FiniteCheck {
         _v: &'static str,
         _len: usize,
     ) -> Result<Compound<'a>, Stop> {
-        Ok(Compound { outer: self, index: 0, key: None })
+        Ok(Compound {
+            outer: self,
+            index: 0,
+            key: None,
+        })
     }
 }
 
@@ -307,7 +353,9 @@ impl ser::SerializeMap for Compound<'_> {
     fn serialize_key<T: ?Sized + Serialize>(&mut self, key: &T) -> Result<(), Stop> {
         // keys of the case's maps are strings; anything else is named by position
         let index = self.index;
-        let name = serde_json::to_value(key).ok().and_then(|v| v.as_str().map(str::to_string));
+        let name = serde_json::to_value(key)
+            .ok()
+            .and_then(|v| v.as_str().map(str::to_string));
         self.key = Some(name.unwrap_or_else(|| index.to_string()));
         Ok(())
     }
@@ -323,7 +371,11 @@ impl ser::SerializeMap for Compound<'_> {
 impl ser::SerializeStruct for Compound<'_> {
     type Ok = ();
     type Error = Stop;
-    fn serialize_field<T: ?Sized + Serialize>(&mut self, key: &'static str, value: &T) -> Result<(), Stop> {
+    fn serialize_field<T: ?Sized + Serialize>(
+        &mut self,
+        key: &'static str,
+        value: &T,
+    ) -> Result<(), Stop> {
         self.outer.nested(Segment::Field(key), value)
     }
     fn end(self) -> Result<(), Stop> {
@@ -333,7 +385,11 @@ impl ser::SerializeStruct for Compound<'_> {
 impl ser::SerializeStructVariant for Compound<'_> {
     type Ok = ();
     type Error = Stop;
-    fn serialize_field<T: ?Sized + Serialize>(&mut self, key: &'static str, value: &T) -> Result<(), Stop> {
+    fn serialize_field<T: ?Sized + Serialize>(
+        &mut self,
+        key: &'static str,
+        value: &T,
+    ) -> Result<(), Stop> {
         self.outer.nested(Segment::Field(key), value)
     }
     fn end(self) -> Result<(), Stop> {
@@ -361,19 +417,38 @@ fn non_negative(path: &str, v: f64, what: &str) -> Check {
 }
 
 fn check_scalars(case: &Case) -> Check {
-    positive("fluid.density", case.fluid.density, "the fluid density in kg/m³")?;
-    non_negative("fluid.kinematic_viscosity", case.fluid.kinematic_viscosity, "the kinematic viscosity in m²/s (0 switches viscosity off)")?;
-    positive("particle_spacing", case.particle_spacing, "the initial particle spacing l0 in m")?;
+    positive(
+        "fluid.density",
+        case.fluid.density,
+        "the fluid density in kg/m³",
+    )?;
+    non_negative(
+        "fluid.kinematic_viscosity",
+        case.fluid.kinematic_viscosity,
+        "the kinematic viscosity in m²/s (0 switches viscosity off)",
+    )?;
+    positive(
+        "particle_spacing",
+        case.particle_spacing,
+        "the initial particle spacing l0 in m",
+    )?;
     positive("time.end", case.time.end, "the simulated end time in s")?;
     positive("time.cfl", case.time.cfl, "the Courant number")?;
-    positive("time.max_dt", case.time.max_dt, "the largest time step in s")?;
+    positive(
+        "time.max_dt",
+        case.time.max_dt,
+        "the largest time step in s",
+    )?;
 
     let s = &case.scheme;
     // r_e <= l0 leaves no lattice neighbour inside the kernel: n0 would be zero
     if s.radius <= 1.0 {
         return reject(
             "scheme.radius",
-            format!("the kernel radius r_e/l0 must be greater than 1 (got {}); about 2.1 is usual", s.radius),
+            format!(
+                "the kernel radius r_e/l0 must be greater than 1 (got {}); about 2.1 is usual",
+                s.radius
+            ),
         );
     }
     if let Some(r) = s.laplacian_radius {
@@ -384,42 +459,93 @@ fn check_scalars(case: &Case) -> Check {
             );
         }
     }
-    positive("scheme.solver_tolerance", s.solver_tolerance, "the relative residual at which the linear solver stops")?;
+    positive(
+        "scheme.solver_tolerance",
+        s.solver_tolerance,
+        "the relative residual at which the linear solver stops",
+    )?;
     if s.solver_max_iterations == 0 {
         return reject("scheme.solver_max_iterations", "must be positive (got 0)");
     }
     if !(s.surface_threshold > 0.0 && s.surface_threshold <= 1.0) {
         return reject(
             "scheme.surface_threshold",
-            format!("must lie in (0, 1] (got {}): a fraction of n0, about 0.97 is usual", s.surface_threshold),
+            format!(
+                "must lie in (0, 1] (got {}): a fraction of n0, about 0.97 is usual",
+                s.surface_threshold
+            ),
         );
     }
-    non_negative("scheme.surface_asymmetry", s.surface_asymmetry, "0 disables the neighbour-distribution check")?;
-    non_negative("scheme.gradient_stabilization", s.gradient_stabilization, "the weight of the minimum-pressure repulsion")?;
-    non_negative("scheme.stabilization_distance", s.stabilization_distance, "a ratio of particle_spacing")?;
-    non_negative("scheme.mixed_relaxation", s.mixed_relaxation, "the relaxation of the PND term")?;
-    non_negative("scheme.compressibility", s.compressibility, "the quasi-compressibility in 1/Pa")?;
-    non_negative("scheme.collision_distance", s.collision_distance, "a ratio of particle_spacing")?;
+    non_negative(
+        "scheme.surface_asymmetry",
+        s.surface_asymmetry,
+        "0 disables the neighbour-distribution check",
+    )?;
+    non_negative(
+        "scheme.gradient_stabilization",
+        s.gradient_stabilization,
+        "the weight of the minimum-pressure repulsion",
+    )?;
+    non_negative(
+        "scheme.stabilization_distance",
+        s.stabilization_distance,
+        "a ratio of particle_spacing",
+    )?;
+    non_negative(
+        "scheme.mixed_relaxation",
+        s.mixed_relaxation,
+        "the relaxation of the PND term",
+    )?;
+    non_negative(
+        "scheme.compressibility",
+        s.compressibility,
+        "the quasi-compressibility in 1/Pa",
+    )?;
+    non_negative(
+        "scheme.collision_distance",
+        s.collision_distance,
+        "a ratio of particle_spacing",
+    )?;
     if !(0.0..=1.0).contains(&s.collision_restitution) {
         return reject(
             "scheme.collision_restitution",
             format!("must lie in [0, 1] (got {})", s.collision_restitution),
         );
     }
-    non_negative("scheme.wall_repulsion_distance", s.wall_repulsion_distance, "a ratio of particle_spacing")?;
+    non_negative(
+        "scheme.wall_repulsion_distance",
+        s.wall_repulsion_distance,
+        "a ratio of particle_spacing",
+    )?;
     if let Some(v) = s.max_speed {
-        positive("scheme.max_speed", v, "the speed in m/s above which a run fails")?;
+        positive(
+            "scheme.max_speed",
+            v,
+            "the speed in m/s above which a run fails",
+        )?;
     }
 
     let o = &case.output;
     if let Some(v) = o.load_interval {
-        positive("output.load_interval", v, "the interval between load rows in s (null: every step)")?;
+        positive(
+            "output.load_interval",
+            v,
+            "the interval between load rows in s (null: every step)",
+        )?;
     }
     if let Some(v) = o.snapshot_interval {
-        positive("output.snapshot_interval", v, "the interval between snapshots in s (null: none)")?;
+        positive(
+            "output.snapshot_interval",
+            v,
+            "the interval between snapshots in s (null: none)",
+        )?;
     }
     if let Some(v) = o.filter_window {
-        positive("output.filter_window", v, "the width of the load filter in s (null: automatic)")?;
+        positive(
+            "output.filter_window",
+            v,
+            "the width of the load filter in s (null: automatic)",
+        )?;
     }
     Ok(())
 }
@@ -433,7 +559,10 @@ fn check_domain(case: &Case) -> Check {
         if d.min[axis] >= d.max[axis] {
             return reject(
                 "domain",
-                format!("domain.min must be below domain.max in {name} (got min {} >= max {})", d.min[axis], d.max[axis]),
+                format!(
+                    "domain.min must be below domain.max in {name} (got min {} >= max {})",
+                    d.min[axis], d.max[axis]
+                ),
             );
         }
     }
@@ -449,7 +578,9 @@ fn check_particle_limit(case: &Case, limits: &Limits) -> Check {
     if case.fluid_blocks.is_empty() {
         return reject("fluid_blocks", "at least one fluid block is needed");
     }
-    let Some(n) = estimated_particles(case) else { return Ok(()) };
+    let Some(n) = estimated_particles(case) else {
+        return Ok(());
+    };
     if !n.is_finite() || n.round() > limits.max_particles as f64 {
         return reject(
             "particle_spacing",
@@ -471,15 +602,25 @@ fn check_particle_limit(case: &Case, limits: &Limits) -> Check {
 fn check_polygon(path: &str, polygon: &[Point]) -> Result<f64, CaseError> {
     let n = polygon.len();
     if n < 3 {
-        return reject(path, format!("a polygon needs at least 3 vertices (got {n})"));
+        return reject(
+            path,
+            format!("a polygon needs at least 3 vertices (got {n})"),
+        );
     }
     if n > MAX_VERTICES {
-        return reject(path, format!("a polygon may have at most {MAX_VERTICES} vertices (got {n})"));
+        return reject(
+            path,
+            format!("a polygon may have at most {MAX_VERTICES} vertices (got {n})"),
+        );
     }
     for k in 0..n {
         let next = (k + 1) % n;
         if polygon[k] == polygon[next] {
-            let hint = if next == 0 { " (do not repeat the first vertex at the end: polygons close themselves)" } else { "" };
+            let hint = if next == 0 {
+                " (do not repeat the first vertex at the end: polygons close themselves)"
+            } else {
+                ""
+            };
             return reject(
                 format!("{path}[{next}]"),
                 format!("repeats the previous vertex {:?}{hint}", polygon[k]),
@@ -491,7 +632,10 @@ fn check_polygon(path: &str, polygon: &[Point]) -> Result<f64, CaseError> {
     let (lo, hi) = bounds(&pts);
     let scale = (hi - lo).norm();
     if !area.is_finite() {
-        return reject(path, "the coordinates are too large to compute the polygon's area");
+        return reject(
+            path,
+            "the coordinates are too large to compute the polygon's area",
+        );
     }
     for i in 0..n {
         for j in i + 1..n {
@@ -504,13 +648,20 @@ fn check_polygon(path: &str, polygon: &[Point]) -> Result<f64, CaseError> {
             if segments_intersect(a, b, c, d) {
                 return reject(
                     path,
-                    format!("the polygon is self-intersecting: edge {i}-{} crosses edge {j}-{}", (i + 1) % n, (j + 1) % n),
+                    format!(
+                        "the polygon is self-intersecting: edge {i}-{} crosses edge {j}-{}",
+                        (i + 1) % n,
+                        (j + 1) % n
+                    ),
                 );
             }
         }
     }
     if area.abs() <= 1e-12 * scale * scale {
-        return reject(path, "the polygon has zero area (its vertices are collinear)");
+        return reject(
+            path,
+            "the polygon has zero area (its vertices are collinear)",
+        );
     }
     Ok(area)
 }
@@ -557,13 +708,22 @@ fn check_walls(case: &Case) -> Check {
         let path = format!("walls[{i}].polyline");
         let n = wall.polyline.len();
         if n < 2 {
-            return reject(path, format!("a wall polyline needs at least 2 points (got {n})"));
+            return reject(
+                path,
+                format!("a wall polyline needs at least 2 points (got {n})"),
+            );
         }
         if n > MAX_VERTICES {
-            return reject(path, format!("a wall polyline may have at most {MAX_VERTICES} points (got {n})"));
+            return reject(
+                path,
+                format!("a wall polyline may have at most {MAX_VERTICES} points (got {n})"),
+            );
         }
         if wall.closed && n < 3 {
-            return reject(path, format!("a closed wall needs at least 3 points (got {n})"));
+            return reject(
+                path,
+                format!("a closed wall needs at least 3 points (got {n})"),
+            );
         }
         let segments = if wall.closed { n } else { n - 1 };
         for k in 0..segments {
@@ -576,7 +736,10 @@ fn check_walls(case: &Case) -> Check {
                 };
                 return reject(
                     format!("{path}[{next}]"),
-                    format!("zero-length segment: repeats the previous point {:?}{hint}", wall.polyline[k]),
+                    format!(
+                        "zero-length segment: repeats the previous point {:?}{hint}",
+                        wall.polyline[k]
+                    ),
                 );
             }
         }
@@ -588,7 +751,10 @@ fn check_walls(case: &Case) -> Check {
 fn placed_body(body: &Body) -> Vec<Vec2> {
     let (s, c) = body.angle.sin_cos();
     let t = vec2(body.position);
-    body.polygon.iter().map(|p| Vec2::new(c * p[0] - s * p[1], s * p[0] + c * p[1]) + t).collect()
+    body.polygon
+        .iter()
+        .map(|p| Vec2::new(c * p[0] - s * p[1], s * p[0] + c * p[1]) + t)
+        .collect()
 }
 
 fn edges(pts: &[Vec2]) -> Vec<[Vec2; 2]> {
@@ -609,12 +775,22 @@ fn check_bodies(case: &Case) -> Check {
         let motion = format!("bodies[{i}].motion");
         match &body.motion {
             Motion::Free { mass, inertia, .. } => {
-                positive(&format!("{motion}.mass"), *mass, "the mass in kg per metre of span")?;
+                positive(
+                    &format!("{motion}.mass"),
+                    *mass,
+                    "the mass in kg per metre of span",
+                )?;
                 if let Some(j) = inertia {
-                    positive(&format!("{motion}.inertia"), *j, "the moment of inertia in kg·m²/m (omit it to compute it from the polygon)")?;
+                    positive(
+                        &format!("{motion}.inertia"),
+                        *j,
+                        "the moment of inertia in kg·m²/m (omit it to compute it from the polygon)",
+                    )?;
                 }
             }
-            Motion::Prescribed { table: Some(table), .. } => {
+            Motion::Prescribed {
+                table: Some(table), ..
+            } => {
                 if table.is_empty() {
                     return reject(format!("{motion}.table"), "a velocity table needs at least one sample (omit it for a constant velocity)");
                 }
@@ -640,7 +816,8 @@ fn check_bodies(case: &Case) -> Check {
 /// Do two closed polygons overlap (edges crossing, or one inside the other)?
 fn polygons_overlap(a: &[Vec2], b: &[Vec2]) -> bool {
     let (ea, eb) = (edges(a), edges(b));
-    ea.iter().any(|[p, q]| eb.iter().any(|[r, s]| segments_intersect(*p, *q, *r, *s)))
+    ea.iter()
+        .any(|[p, q]| eb.iter().any(|[r, s]| segments_intersect(*p, *q, *r, *s)))
         || inside(a[0], &eb)
         || inside(b[0], &ea)
 }
@@ -651,7 +828,11 @@ fn check_overlaps(case: &Case) -> Check {
         let body_edges = edges(body);
         for (w, wall) in case.walls.iter().enumerate() {
             let segs = wall_segments(case, w);
-            let crosses = segs.iter().any(|[r, s]| body_edges.iter().any(|[p, q]| segments_intersect(*p, *q, *r, *s)));
+            let crosses = segs.iter().any(|[r, s]| {
+                body_edges
+                    .iter()
+                    .any(|[p, q]| segments_intersect(*p, *q, *r, *s))
+            });
             let wall_inside = wall.polyline.iter().any(|p| inside(vec2(*p), &body_edges));
             if crosses || wall_inside {
                 return reject(
@@ -704,10 +885,18 @@ fn check_names(case: &Case) -> Check {
         .iter()
         .enumerate()
         .map(|(i, w)| (format!("walls[{i}].name"), w.name.as_str()))
-        .chain(case.bodies.iter().enumerate().map(|(i, b)| (format!("bodies[{i}].name"), b.name.as_str())));
+        .chain(
+            case.bodies
+                .iter()
+                .enumerate()
+                .map(|(i, b)| (format!("bodies[{i}].name"), b.name.as_str())),
+        );
     for (path, name) in named {
         if name.trim().is_empty() {
-            return reject(path, "a name must not be empty (it labels rows of loads.csv)");
+            return reject(
+                path,
+                "a name must not be empty (it labels rows of loads.csv)",
+            );
         }
         if name.contains([',', '"', '\n', '\r']) {
             return reject(path, format!("name '{name}' must not contain commas, quotes or line breaks (it is a CSV field)"));
@@ -724,13 +913,28 @@ fn check_names(case: &Case) -> Check {
     for (i, p) in case.output.probes.iter().enumerate() {
         let path = format!("output.probes[{i}].name");
         if p.name.trim().is_empty() {
-            return reject(path, "a probe name must not be empty (it labels rows of probes.csv)");
+            return reject(
+                path,
+                "a probe name must not be empty (it labels rows of probes.csv)",
+            );
         }
         if p.name.contains([',', '"', '\n', '\r']) {
-            return reject(path, format!("probe name '{}' must not contain commas, quotes or line breaks", p.name));
+            return reject(
+                path,
+                format!(
+                    "probe name '{}' must not contain commas, quotes or line breaks",
+                    p.name
+                ),
+            );
         }
         if let Some(first) = probes.insert(p.name.as_str(), i) {
-            return reject(path, format!("duplicate probe name '{}' (already used by output.probes[{first}])", p.name));
+            return reject(
+                path,
+                format!(
+                    "duplicate probe name '{}' (already used by output.probes[{first}])",
+                    p.name
+                ),
+            );
         }
     }
     Ok(())

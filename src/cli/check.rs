@@ -41,7 +41,12 @@ pub fn check(case_path: &Path, overrides: &[String], max_particles: Option<usize
         case.time.cfl,
         case.time.max_dt
     );
-    println!("walls: {}, bodies: {}, probes: {}", case.walls.len(), case.bodies.len(), case.output.probes.len());
+    println!(
+        "walls: {}, bodies: {}, probes: {}",
+        case.walls.len(),
+        case.bodies.len(),
+        case.output.probes.len()
+    );
     println!(
         "kernel: {} with r_e = {} l0 = {:.6} m, Laplacian r_e = {} l0 = {:.6} m, n0 = {:.6}, lambda = {:.6e} m²",
         name_of(&s.kernel),
@@ -64,5 +69,8 @@ pub fn check(case_path: &Path, overrides: &[String], max_particles: Option<usize
 
 /// The serde name of a unit enum variant (`higher_order`).
 fn name_of<T: serde::Serialize>(value: &T) -> String {
-    serde_json::to_value(value).ok().and_then(|v| v.as_str().map(str::to_string)).unwrap_or_default()
+    serde_json::to_value(value)
+        .ok()
+        .and_then(|v| v.as_str().map(str::to_string))
+        .unwrap_or_default()
 }

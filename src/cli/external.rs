@@ -23,7 +23,12 @@ pub fn serve(config: mpsfsi::service::Config) -> i32 {
 
 /// `mpsfsi bench`: the study of DESIGN.md §5 (report.md, results.csv, SVG plots).
 pub fn bench(args: BenchArgs) -> i32 {
-    let options = mpsfsi::bench::BenchOptions { quick: args.quick, operators: args.operators, stress: args.stress, out_dir: args.out };
+    let options = mpsfsi::bench::BenchOptions {
+        quick: args.quick,
+        operators: args.operators,
+        stress: args.stress,
+        out_dir: args.out,
+    };
     match mpsfsi::bench::run(options) {
         Ok(()) => 0,
         Err(e) => {

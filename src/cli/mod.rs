@@ -16,7 +16,11 @@ pub const EXIT_REJECTED: i32 = 2;
 pub const EXIT_ERROR: i32 = 3;
 
 #[derive(Parser, Debug)]
-#[command(name = "mpsfsi", version, about = "2D MPS fluid-structure simulation: water-entry loads on rigid bodies")]
+#[command(
+    name = "mpsfsi",
+    version,
+    about = "2D MPS fluid-structure simulation: water-entry loads on rigid bodies"
+)]
 pub struct Cli {
     #[command(subcommand)]
     pub command: Command,
@@ -73,7 +77,11 @@ pub struct BenchArgs {
 pub fn main(cli: Cli) -> i32 {
     match cli.command {
         Command::Run { case, out, set } => run::run(&case, &out, &set),
-        Command::Check { case, set, max_particles } => check::check(&case, &set, max_particles),
+        Command::Check {
+            case,
+            set,
+            max_particles,
+        } => check::check(&case, &set, max_particles),
         Command::Schema => {
             print!("{}", mpsfsi::case::schema::case_schema_json());
             0

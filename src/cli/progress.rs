@@ -18,15 +18,21 @@ impl ProgressBarObserver {
     /// A bar when stderr is a terminal, silence otherwise.
     pub fn for_stderr() -> Self {
         let bar = std::io::stderr().is_terminal().then(|| {
-            let bar = ProgressBar::with_draw_target(Some(TICKS), ProgressDrawTarget::stderr_with_hz(5));
-            let style = ProgressStyle::with_template("{spinner} [{elapsed_precise}] {wide_bar} {msg} ETA {eta}")
-                .unwrap_or_else(|_| ProgressStyle::default_bar());
+            let bar =
+                ProgressBar::with_draw_target(Some(TICKS), ProgressDrawTarget::stderr_with_hz(5));
+            let style = ProgressStyle::with_template(
+                "{spinner} [{elapsed_precise}] {wide_bar} {msg} ETA {eta}",
+            )
+            .unwrap_or_else(|_| ProgressStyle::default_bar());
             bar.set_style(style);
             bar.enable_steady_tick(Duration::from_millis(200));
             bar.set_message("building the scene");
             bar
         });
-        Self { bar, last_draw: Instant::now() }
+        Self {
+            bar,
+            last_draw: Instant::now(),
+        }
     }
 
     /// Remove the bar before the result line is printed.

@@ -15,7 +15,10 @@ pub fn run(case_path: &Path, out: &Path, overrides: &[String]) -> i32 {
         return report_case_error(&e);
     }
     if let Err(e) = std::fs::create_dir_all(out) {
-        eprintln!("error: cannot create the run directory {}: {e}", out.display());
+        eprintln!(
+            "error: cannot create the run directory {}: {e}",
+            out.display()
+        );
         return EXIT_ERROR;
     }
     let mut observer = ProgressBarObserver::for_stderr();
@@ -39,7 +42,11 @@ pub fn run(case_path: &Path, out: &Path, overrides: &[String]) -> i32 {
                     0
                 }
                 RunStatus::Failed | RunStatus::Cancelled => {
-                    let status = if summary.status == RunStatus::Failed { "failed" } else { "cancelled" };
+                    let status = if summary.status == RunStatus::Failed {
+                        "failed"
+                    } else {
+                        "cancelled"
+                    };
                     let reason = summary.reason.as_deref().unwrap_or("no reason given");
                     eprintln!("error: run {status}: {reason} ({line})");
                     EXIT_FAILED_RUN

@@ -59,12 +59,21 @@ pub fn wetted_extent(sim: &Simulation, wall: usize) -> Option<(Vec2, Vec2)> {
 }
 
 /// The estimate (mass, rotational inertia) for one body given its free degrees of freedom.
-pub fn estimate(model: AddedMass, sim: &Simulation, wall: usize, free_x: bool, free_y: bool, free_rotation: bool) -> (Real, Real) {
+pub fn estimate(
+    model: AddedMass,
+    sim: &Simulation,
+    wall: usize,
+    free_x: bool,
+    free_y: bool,
+    free_rotation: bool,
+) -> (Real, Real) {
     match model {
         AddedMass::Off => (0.0, 0.0),
         AddedMass::Constant { mass, inertia } => (mass, if free_rotation { inertia } else { 0.0 }),
         AddedMass::WettedWidth { factor } => {
-            let Some((lo, hi)) = wetted_extent(sim, wall) else { return (0.0, 0.0) };
+            let Some((lo, hi)) = wetted_extent(sim, wall) else {
+                return (0.0, 0.0);
+            };
             let rho = sim.params.density;
             let l0 = sim.params.l0;
             // the first layer sits l0/2 off the surface: its projections span the wetted
@@ -80,7 +89,11 @@ pub fn estimate(model: AddedMass, sim: &Simulation, wall: usize, free_x: bool, f
                 m = m.max(plate(cy));
             }
             let c = cx.max(cy);
-            let inertia = if free_rotation { std::f64::consts::PI * rho * c.powi(4) / 16.0 } else { 0.0 };
+            let inertia = if free_rotation {
+                std::f64::consts::PI * rho * c.powi(4) / 16.0
+            } else {
+                0.0
+            };
             (factor * m, factor * inertia)
         }
     }

@@ -34,7 +34,8 @@ use crate::engine::math::{cross, rotate, vec2, Real, Vec2};
 use crate::engine::walls::geometry::{centroid, polar_moment_about_centroid, signed_area};
 use crate::engine::Simulation;
 use rapier2d_f64::prelude::{
-    ColliderBuilder, LockedAxes, MassProperties, PhysicsWorld, RigidBodyBuilder, RigidBodyHandle, Vector,
+    ColliderBuilder, LockedAxes, MassProperties, PhysicsWorld, RigidBodyBuilder, RigidBodyHandle,
+    Vector,
 };
 
 /// One row of bodies.csv (centre of mass, angle, velocities): defined with the writers.
@@ -115,7 +116,10 @@ impl Coupling {
         if case.bodies.is_empty() {
             return None;
         }
-        let mut world = PhysicsWorld { gravity: Vector::ZERO, ..PhysicsWorld::default() };
+        let mut world = PhysicsWorld {
+            gravity: Vector::ZERO,
+            ..PhysicsWorld::default()
+        };
         // fixed walls: polylines attached to no body are fixed
         for w in &case.walls {
             let pts: Vec<Vector> = w.polyline.iter().map(|p| Vector::new(p[0], p[1])).collect();
@@ -124,7 +128,9 @@ impl Coupling {
             if w.closed && n > 2 {
                 idx.push([n - 1, 0]);
             }
-            world.colliders.insert(ColliderBuilder::polyline(pts, Some(idx)).friction(0.0));
+            world
+                .colliders
+                .insert(ColliderBuilder::polyline(pts, Some(idx)).friction(0.0));
         }
         let mut bodies = Vec::new();
         for (wall, object) in sim.walls.iter().enumerate() {
@@ -134,18 +140,31 @@ impl Coupling {
             let local_com = centroid(&poly);
             let state = &object.state;
             let (builder, kind) = match &body.motion {
-                Motion::Prescribed { velocity, angular_velocity, table } => {
-                    let prescribed = PrescribedVelocity::new(*velocity, *angular_velocity, table.as_ref());
+                Motion::Prescribed {
+                    velocity,
+                    angular_velocity,
+                    table,
+                } => {
+                    let prescribed =
+                        PrescribedVelocity::new(*velocity, *angular_velocity, table.as_ref());
                     // the imposed velocity is that of the centroid, and the body turns
                     // about it: give rapier the centroid as the centre of mass (the mass
                     // itself plays no role for a kinematic body)
-                    let builder = RigidBodyBuilder::kinematic_velocity_based()
-                        .additional_mass_properties(MassProperties::new(to_rapier(local_com), 1.0, 1.0));
+                    let builder =
+                        RigidBodyBuilder::kinematic_velocity_based().additional_mass_properties(
+                            MassProperties::new(to_rapier(local_com), 1.0, 1.0),
+                        );
                     (builder, BodyKind::Prescribed(prescribed))
                 }
-                Motion::Free { mass, inertia, locked, .. } => {
+                Motion::Free {
+                    mass,
+                    inertia,
+                    locked,
+                    ..
+                } => {
                     let area = signed_area(&poly).abs();
-                    let inertia = inertia.unwrap_or_else(|| mass / area * polar_moment_about_centroid(&poly));
+                    let inertia =
+                        inertia.unwrap_or_else(|| mass / area * polar_moment_about_centroid(&poly));
                     let free_x = !locked.contains(&Dof::X);
                     let free_y = !locked.contains(&Dof::Y);
                     let free_rotation = !locked.contains(&Dof::Rotation);
@@ -162,7 +181,11 @@ impl Coupling {
                     let builder = RigidBodyBuilder::dynamic()
                         .locked_axes(axes)
                         .can_sleep(false)
-                        .additional_mass_properties(MassProperties::new(to_rapier(local_com), *mass, inertia));
+                        .additional_mass_properties(MassProperties::new(
+                            to_rapier(local_com),
+                            *mass,
+                            inertia,
+                        ));
                     let free = FreeBody {
                         mass: *mass,
                         inertia,
@@ -196,16 +219,30 @@ impl Coupling {
             .density(0.0)
             .friction(0.0);
             let (handle, _) = world.insert(rb, collider);
-            bodies.push(CoupledBody { name: body.name.clone(), wall, handle, local_com, kind });
+            bodies.push(CoupledBody {
+                name: body.name.clone(),
+                wall,
+                handle,
+                local_com,
+                kind,
+            });
         }
-        Some(Self { world, bodies, gravity: vec2(case.fluid.gravity), options, seconds: 0.0 })
+        Some(Self {
+            world,
+            bodies,
+            gravity: vec2(case.fluid.gravity),
+            options,
+            seconds: 0.0,
+        })
     }
 
     /// Impose the prescribed velocities over the step [t, t + dt] (t = `sim.time`).
     pub fn before_step(&mut self, sim: &mut Simulation, dt: Real) {
         let clock = std::time::Instant::now();
         for b in &self.bodies {
-            let BodyKind::Prescribed(p) = &b.kind else { continue };
+            let BodyKind::Prescribed(p) = &b.kind else {
+                continue;
+            };
             let k = p.over_step(sim.time, dt);
             let rb = &mut self.world.bodies[b.handle];
             rb.set_linvel(to_rapier(k.velocity), true);
@@ -225,13 +262,19 @@ impl Coupling {
         let clock = std::time::Instant::now();
         let model = self.options.added_mass;
         for b in &mut self.bodies {
-            let BodyKind::Free(f) = &mut b.kind else { continue };
+            let BodyKind::Free(f) = &mut b.kind else {
+                continue;
+            };
             let load = sim.loads[b.wall];
-            let (ma, ia) = added_mass::estimate(model, sim, b.wall, f.free_x, f.free_y, f.free_rotation);
+            let (ma, ia) =
+                added_mass::estimate(model, sim, b.wall, f.free_x, f.free_y, f.free_rotation);
             f.added_mass = ma;
             f.added_inertia = ia;
             let rb = &mut self.world.bodies[b.handle];
-            rb.set_additional_mass_properties(MassProperties::new(to_rapier(b.local_com), f.mass + ma, f.inertia + ia), true);
+            rb.set_additional_mass_properties(
+                MassProperties::new(to_rapier(b.local_com), f.mass + ma, f.inertia + ia),
+                true,
+            );
             // rapier keeps user forces across steps: reset, then add this step's
             rb.reset_forces(true);
             rb.reset_torques(true);
@@ -255,7 +298,9 @@ impl Coupling {
             let state = &mut sim.walls[b.wall].state;
             let angle = rb.rotation().angle();
             // keep the angle continuous across ±pi
-            let turn = (angle - state.angle + std::f64::consts::PI).rem_euclid(2.0 * std::f64::consts::PI) - std::f64::consts::PI;
+            let turn = (angle - state.angle + std::f64::consts::PI)
+                .rem_euclid(2.0 * std::f64::consts::PI)
+                - std::f64::consts::PI;
             state.angle += turn;
             state.position = from_rapier(rb.translation());
             state.center_of_mass = state.position + rotate(b.local_com, state.angle);
@@ -286,7 +331,15 @@ impl Coupling {
                     }
                     BodyKind::Free(_) => (s.velocity, s.angular_velocity),
                 };
-                BodySample { name: b.name.clone(), x: s.center_of_mass.x, y: s.center_of_mass.y, angle: s.angle, vx: v.x, vy: v.y, omega: w }
+                BodySample {
+                    name: b.name.clone(),
+                    x: s.center_of_mass.x,
+                    y: s.center_of_mass.y,
+                    angle: s.angle,
+                    vx: v.x,
+                    vy: v.y,
+                    omega: w,
+                }
             })
             .collect()
     }

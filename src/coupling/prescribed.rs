@@ -7,7 +7,10 @@ use crate::engine::math::{vec2, Real, Vec2};
 /// Imposed velocity of a prescribed body.
 #[derive(Debug, Clone)]
 pub enum PrescribedVelocity {
-    Constant { velocity: Vec2, angular_velocity: Real },
+    Constant {
+        velocity: Vec2,
+        angular_velocity: Real,
+    },
     /// Samples sorted by time.
     Table(Vec<VelocitySample>),
 }
@@ -22,21 +25,31 @@ pub struct Kinematics {
 }
 
 impl PrescribedVelocity {
-    pub fn new(velocity: [Real; 2], angular_velocity: Real, table: Option<&Vec<VelocitySample>>) -> Self {
+    pub fn new(
+        velocity: [Real; 2],
+        angular_velocity: Real,
+        table: Option<&Vec<VelocitySample>>,
+    ) -> Self {
         match table {
             Some(t) if !t.is_empty() => {
                 let mut t = t.clone();
                 t.sort_by(|a, b| a.time.total_cmp(&b.time));
                 Self::Table(t)
             }
-            _ => Self::Constant { velocity: vec2(velocity), angular_velocity },
+            _ => Self::Constant {
+                velocity: vec2(velocity),
+                angular_velocity,
+            },
         }
     }
 
     /// Kinematics at time `t` (the acceleration is the slope of the table segment).
     pub fn at(&self, t: Real) -> Kinematics {
         match self {
-            Self::Constant { velocity, angular_velocity } => Kinematics {
+            Self::Constant {
+                velocity,
+                angular_velocity,
+            } => Kinematics {
                 velocity: *velocity,
                 angular_velocity: *angular_velocity,
                 acceleration: Vec2::zeros(),
@@ -65,7 +78,8 @@ impl PrescribedVelocity {
                 let (va, vb) = (vec2(a.velocity), vec2(b.velocity));
                 Kinematics {
                     velocity: va + (vb - va) * f,
-                    angular_velocity: a.angular_velocity + (b.angular_velocity - a.angular_velocity) * f,
+                    angular_velocity: a.angular_velocity
+                        + (b.angular_velocity - a.angular_velocity) * f,
                     acceleration: (vb - va) / span,
                     angular_acceleration: (b.angular_velocity - a.angular_velocity) / span,
                 }

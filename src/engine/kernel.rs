@@ -28,20 +28,36 @@ pub struct Koshizuka;
 impl Kernel for Koshizuka {
     #[inline]
     fn w(r: Real, re: Real) -> Real {
-        if r < re && r > 0.0 { re / r - 1.0 } else { 0.0 }
+        if r < re && r > 0.0 {
+            re / r - 1.0
+        } else {
+            0.0
+        }
     }
     #[inline]
     fn dw(r: Real, re: Real) -> Real {
-        if r < re && r > 0.0 { -re / (r * r) } else { 0.0 }
+        if r < re && r > 0.0 {
+            -re / (r * r)
+        } else {
+            0.0
+        }
     }
     #[inline]
     fn d2w(r: Real, re: Real) -> Real {
-        if r < re && r > 0.0 { 2.0 * re / (r * r * r) } else { 0.0 }
+        if r < re && r > 0.0 {
+            2.0 * re / (r * r * r)
+        } else {
+            0.0
+        }
     }
     #[inline]
     fn hl(r: Real, re: Real) -> Real {
         // w'' - w'/r = 3 r_e / r³ (Khayyer & Gotoh 2010, 2D)
-        if r < re && r > 0.0 { 3.0 * re / (r * r * r) } else { 0.0 }
+        if r < re && r > 0.0 {
+            3.0 * re / (r * r * r)
+        } else {
+            0.0
+        }
     }
 }
 
@@ -53,17 +69,29 @@ impl Kernel for NonSingular {
     #[inline]
     fn w(r: Real, re: Real) -> Real {
         let q = r / re;
-        if q < 1.0 { (1.0 - q).powi(3) } else { 0.0 }
+        if q < 1.0 {
+            (1.0 - q).powi(3)
+        } else {
+            0.0
+        }
     }
     #[inline]
     fn dw(r: Real, re: Real) -> Real {
         let q = r / re;
-        if q < 1.0 { -3.0 * (1.0 - q).powi(2) / re } else { 0.0 }
+        if q < 1.0 {
+            -3.0 * (1.0 - q).powi(2) / re
+        } else {
+            0.0
+        }
     }
     #[inline]
     fn d2w(r: Real, re: Real) -> Real {
         let q = r / re;
-        if q < 1.0 { 6.0 * (1.0 - q) / (re * re) } else { 0.0 }
+        if q < 1.0 {
+            6.0 * (1.0 - q) / (re * re)
+        } else {
+            0.0
+        }
     }
 }
 
@@ -75,22 +103,38 @@ impl Kernel for WendlandC2 {
     #[inline]
     fn w(r: Real, re: Real) -> Real {
         let q = r / re;
-        if q < 1.0 { (1.0 - q).powi(4) * (1.0 + 4.0 * q) } else { 0.0 }
+        if q < 1.0 {
+            (1.0 - q).powi(4) * (1.0 + 4.0 * q)
+        } else {
+            0.0
+        }
     }
     #[inline]
     fn dw(r: Real, re: Real) -> Real {
         let q = r / re;
-        if q < 1.0 { -20.0 * q * (1.0 - q).powi(3) / re } else { 0.0 }
+        if q < 1.0 {
+            -20.0 * q * (1.0 - q).powi(3) / re
+        } else {
+            0.0
+        }
     }
     #[inline]
     fn d2w(r: Real, re: Real) -> Real {
         let q = r / re;
-        if q < 1.0 { 20.0 * (1.0 - q).powi(2) * (4.0 * q - 1.0) / (re * re) } else { 0.0 }
+        if q < 1.0 {
+            20.0 * (1.0 - q).powi(2) * (4.0 * q - 1.0) / (re * re)
+        } else {
+            0.0
+        }
     }
     #[inline]
     fn hl(r: Real, re: Real) -> Real {
         let q = r / re;
-        if q < 1.0 { 60.0 * q * (1.0 - q).powi(2) / (re * re) } else { 0.0 }
+        if q < 1.0 {
+            60.0 * q * (1.0 - q).powi(2) / (re * re)
+        } else {
+            0.0
+        }
     }
 }
 

@@ -23,7 +23,14 @@ impl CellGrid {
     pub fn build(positions: &[Vec2], cell_size: Real) -> Self {
         assert!(cell_size > 0.0);
         if positions.is_empty() {
-            return Self { origin: Vec2::zeros(), cell_size, nx: 1, ny: 1, cell_start: vec![0, 0], sorted: vec![] };
+            return Self {
+                origin: Vec2::zeros(),
+                cell_size,
+                nx: 1,
+                ny: 1,
+                cell_start: vec![0, 0],
+                sorted: vec![],
+            };
         }
         let (mut lo, mut hi) = (positions[0], positions[0]);
         for p in positions {
@@ -54,7 +61,14 @@ impl CellGrid {
             sorted[fill[c as usize] as usize] = i as u32;
             fill[c as usize] += 1;
         }
-        Self { origin, cell_size, nx, ny, cell_start, sorted }
+        Self {
+            origin,
+            cell_size,
+            nx,
+            ny,
+            cell_start,
+            sorted,
+        }
     }
 
     /// Cell coordinates of a point, clamped to the grid.
@@ -131,7 +145,12 @@ impl NeighborList {
             }
             indices.extend_from_slice(&idx);
         }
-        Self { radius, offsets, indices, grid }
+        Self {
+            radius,
+            offsets,
+            indices,
+            grid,
+        }
     }
 
     #[inline]

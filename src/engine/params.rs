@@ -55,10 +55,22 @@ pub fn lattice_offsets(reach: Real, l0: Real) -> Vec<(Real, Real)> {
 
 impl MpsParameters {
     pub fn new(case: &Case) -> Self {
-        Self::from_scheme(case.particle_spacing, &case.scheme, case.fluid.density, case.fluid.kinematic_viscosity, case.fluid.gravity)
+        Self::from_scheme(
+            case.particle_spacing,
+            &case.scheme,
+            case.fluid.density,
+            case.fluid.kinematic_viscosity,
+            case.fluid.gravity,
+        )
     }
 
-    pub fn from_scheme(l0: Real, scheme: &Scheme, density: Real, viscosity: Real, gravity: [Real; 2]) -> Self {
+    pub fn from_scheme(
+        l0: Real,
+        scheme: &Scheme,
+        density: Real,
+        viscosity: Real,
+        gravity: [Real; 2],
+    ) -> Self {
         let re = scheme.radius * l0;
         let re_lap = scheme.laplacian_radius() * l0;
         let offsets = lattice_offsets(re.max(re_lap), l0);

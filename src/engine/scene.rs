@@ -54,13 +54,28 @@ pub fn initial_body_state(case: &Case, b: usize) -> WallState {
     let position = vec2(body.position);
     let com = position + rotate(centroid(&poly), body.angle);
     let (velocity, angular_velocity) = match &body.motion {
-        Motion::Prescribed { velocity, angular_velocity, table } => match table.as_ref().and_then(|t| t.first()) {
+        Motion::Prescribed {
+            velocity,
+            angular_velocity,
+            table,
+        } => match table.as_ref().and_then(|t| t.first()) {
             Some(first) => (vec2(first.velocity), first.angular_velocity),
             None => (vec2(*velocity), *angular_velocity),
         },
-        Motion::Free { velocity, angular_velocity, .. } => (vec2(*velocity), *angular_velocity),
+        Motion::Free {
+            velocity,
+            angular_velocity,
+            ..
+        } => (vec2(*velocity), *angular_velocity),
     };
-    WallState { position, angle: body.angle, velocity, angular_velocity, center_of_mass: com, ..Default::default() }
+    WallState {
+        position,
+        angle: body.angle,
+        velocity,
+        angular_velocity,
+        center_of_mass: com,
+        ..Default::default()
+    }
 }
 
 pub fn build_scene(case: &Case, params: &MpsParameters) -> Scene {
@@ -71,7 +86,10 @@ pub fn build_scene(case: &Case, params: &MpsParameters) -> Scene {
     for block in &case.fluid_blocks {
         let poly: Vec<Vec2> = block.polygon.iter().map(|p| vec2(*p)).collect();
         for p in fill_polygon(&poly, l0) {
-            let key = ((p.x / (0.25 * l0)).round() as i64, (p.y / (0.25 * l0)).round() as i64);
+            let key = (
+                (p.x / (0.25 * l0)).round() as i64,
+                (p.y / (0.25 * l0)).round() as i64,
+            );
             if seen.insert(key) {
                 candidates.push((p, vec2(block.velocity)));
             }
@@ -85,7 +103,12 @@ pub fn build_scene(case: &Case, params: &MpsParameters) -> Scene {
         let solid_left = match wall.fluid_side {
             FluidSide::Left => false,
             FluidSide::Right => true,
-            FluidSide::Auto => fluid_is_right(&pts, wall.closed, &candidates, 2.0 * params.re.max(params.re_lap)),
+            FluidSide::Auto => fluid_is_right(
+                &pts,
+                wall.closed,
+                &candidates,
+                2.0 * params.re.max(params.re_lap),
+            ),
         };
         walls.push(WallObject {
             name: wall.name.clone(),
@@ -118,7 +141,10 @@ pub fn build_scene(case: &Case, params: &MpsParameters) -> Scene {
             if inside(p, loops) {
                 continue 'next;
             }
-            if surface.iter().any(|[a, b]| (closest_on_segment(p, *a, *b) - p).norm() < clearance) {
+            if surface
+                .iter()
+                .any(|[a, b]| (closest_on_segment(p, *a, *b) - p).norm() < clearance)
+            {
                 continue 'next;
             }
         }

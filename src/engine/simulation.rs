@@ -13,9 +13,20 @@ use crate::case::{Case, Scheme};
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
 pub enum SimError {
     #[error("step {step}, t = {time:.6} s: {what} at particle {particle} ({x:.4}, {y:.4})")]
-    Diverged { step: u64, time: Real, particle: usize, x: Real, y: Real, what: String },
+    Diverged {
+        step: u64,
+        time: Real,
+        particle: usize,
+        x: Real,
+        y: Real,
+        what: String,
+    },
     #[error("step {step}, t = {time:.6} s: pressure solve failed: {reason}")]
-    Solver { step: u64, time: Real, reason: String },
+    Solver {
+        step: u64,
+        time: Real,
+        reason: String,
+    },
     #[error("step {step}, t = {time:.6} s: all fluid particles left the domain")]
     NoParticles { step: u64, time: Real },
     #[error("cancelled at step {step}, t = {time:.6} s")]
@@ -103,14 +114,26 @@ impl Simulation {
     /// Build the initial state of a (validated) case.
     pub fn new(case: &Case) -> Self {
         let params = MpsParameters::new(case);
-        let Scene { particles, walls, domain_min, domain_max } = build_scene(case, &params);
+        let Scene {
+            particles,
+            walls,
+            domain_min,
+            domain_max,
+        } = build_scene(case, &params);
         let g = vec2(case.fluid.gravity).norm();
         let height = (domain_max.y - domain_min.y).max(domain_max.x - domain_min.x);
-        let mut fastest: Real = particles.velocity.iter().map(|v| v.norm()).fold(0.0, Real::max);
+        let mut fastest: Real = particles
+            .velocity
+            .iter()
+            .map(|v| v.norm())
+            .fold(0.0, Real::max);
         for w in &walls {
             fastest = fastest.max(w.state.velocity.norm());
         }
-        let speed_limit = case.scheme.max_speed.unwrap_or(10.0 * ((2.0 * g * height).sqrt() + fastest) + 1.0);
+        let speed_limit = case
+            .scheme
+            .max_speed
+            .unwrap_or(10.0 * ((2.0 * g * height).sqrt() + fastest) + 1.0);
         let n_walls = walls.len();
         let mut sim = Self {
             params,
@@ -143,7 +166,11 @@ impl Simulation {
 
     /// Largest particle speed now.
     pub fn max_particle_speed(&self) -> Real {
-        self.particles.velocity.iter().map(|v| v.norm()).fold(0.0, Real::max)
+        self.particles
+            .velocity
+            .iter()
+            .map(|v| v.norm())
+            .fold(0.0, Real::max)
     }
 
     /// The next time step: dt = min(cfl l0 / u_max, viscous limit, max_dt).

@@ -61,13 +61,20 @@ impl<K: Kernel> KernelWeights<K> {
             re: sim.params.re,
             re_lap: sim.params.re_lap,
             // Imoto's second-order Laplacian is the classic one (paper 000 Theorem 3.1)
-            classic_laplacian: matches!(sim.scheme.laplacian, LaplacianKind::Classic | LaplacianKind::SecondOrder),
+            classic_laplacian: matches!(
+                sim.scheme.laplacian,
+                LaplacianKind::Classic | LaplacianKind::SecondOrder
+            ),
             _k: PhantomData,
         }
     }
     #[inline]
     fn laplacian(&self, r: Real) -> Real {
-        if self.classic_laplacian { K::w(r, self.re_lap) } else { K::hl(r, self.re_lap) }
+        if self.classic_laplacian {
+            K::w(r, self.re_lap)
+        } else {
+            K::hl(r, self.re_lap)
+        }
     }
 }
 
@@ -84,11 +91,18 @@ impl<K: Kernel> WallWeights for KernelWeights<K> {
 }
 
 fn wall_kernels(sim: &Simulation) -> WallKernels {
-    WallKernels { l0: sim.params.l0, re: sim.params.re, re_lap: sim.params.re_lap }
+    WallKernels {
+        l0: sim.params.l0,
+        re: sim.params.re,
+        re_lap: sim.params.re_lap,
+    }
 }
 
 fn placed_walls(sim: &Simulation, dt: Real) -> Vec<PlacedWall> {
-    sim.walls.iter().map(|w| PlacedWall::new(w, w.state.advanced(dt))).collect()
+    sim.walls
+        .iter()
+        .map(|w| PlacedWall::new(w, w.state.advanced(dt)))
+        .collect()
 }
 
 fn seconds(t: &mut Instant) -> f64 {
@@ -116,9 +130,25 @@ fn initialize<K: Kernel>(sim: &mut Simulation) {
     sim.neighbors = NeighborList::build(&sim.particles.position, reach);
     let walls = placed_walls(sim, 0.0);
     let weights = KernelWeights::<K>::new(sim);
-    sim.contacts = WallContacts::build(&sim.particles.position, &walls, &wall_kernels(sim), &weights);
-    let n = number_density::<K>(&sim.particles.position, &sim.neighbors, &sim.contacts, sim.params.re);
-    let div = divergence::<K>(&sim.particles.position, &sim.particles.velocity, &sim.neighbors, sim.params.re, sim.params.divergence_coefficient);
+    sim.contacts = WallContacts::build(
+        &sim.particles.position,
+        &walls,
+        &wall_kernels(sim),
+        &weights,
+    );
+    let n = number_density::<K>(
+        &sim.particles.position,
+        &sim.neighbors,
+        &sim.contacts,
+        sim.params.re,
+    );
+    let div = divergence::<K>(
+        &sim.particles.position,
+        &sim.particles.velocity,
+        &sim.neighbors,
+        sim.params.re,
+        sim.params.divergence_coefficient,
+    );
     sim.particles.number_density = n;
     sim.particles.number_density_rate = div;
 }
@@ -176,16 +206,31 @@ fn step<K: Kernel>(sim: &mut Simulation, dt: Real) -> Result<StepInfo, SimError>
     let removed = remove_particles_outside_domain(sim);
     let max_speed = check_health(sim)?;
     sim.stage_times.bookkeeping += seconds(&mut clock);
-    Ok(StepInfo { dt, solver_iterations: iterations, solver_residual: residual, unknowns: sim.scratch.matrix.n, max_speed, removed })
+    Ok(StepInfo {
+        dt,
+        solver_iterations: iterations,
+        solver_residual: residual,
+        unknowns: sim.scratch.matrix.n,
+        max_speed,
+        removed,
+    })
 }
 
 /// Gravity and (when nu > 0) viscosity with no-slip walls.
-fn apply_explicit_forces<K: Kernel>(sim: &mut Simulation, weights: &KernelWeights<K>, dt: Real, loads: &mut [WallLoad]) {
+fn apply_explicit_forces<K: Kernel>(
+    sim: &mut Simulation,
+    weights: &KernelWeights<K>,
+    dt: Real,
+    loads: &mut [WallLoad],
+) {
     let g = vec2(sim.params.gravity);
     let nu = sim.params.viscosity;
     sim.scratch.u_start.clone_from(&sim.particles.velocity);
     if nu <= 0.0 {
-        sim.particles.velocity.par_iter_mut().for_each(|u| *u += g * dt);
+        sim.particles
+            .velocity
+            .par_iter_mut()
+            .for_each(|u| *u += g * dt);
         return;
     }
     let c = sim.params.laplacian_coefficient;
@@ -220,7 +265,12 @@ fn apply_explicit_forces<K: Kernel>(sim: &mut Simulation, weights: &KernelWeight
         if i < sim.neighbors.len() {
             for ct in sim.contacts.of(i) {
                 // split the wall acceleration between contacts by their Laplacian weight
-                let total: Real = sim.contacts.of(i).iter().map(|c| c.terms.laplacian_sum).sum();
+                let total: Real = sim
+                    .contacts
+                    .of(i)
+                    .iter()
+                    .map(|c| c.terms.laplacian_sum)
+                    .sum();
                 if total > 0.0 {
                     let share = aw * (ct.terms.laplacian_sum / total);
                     loads[ct.object as usize].viscous_force -= share * m;
@@ -232,7 +282,12 @@ fn apply_explicit_forces<K: Kernel>(sim: &mut Simulation, weights: &KernelWeight
 
 fn predict_positions(sim: &mut Simulation, dt: Real) {
     let p = &sim.particles;
-    sim.scratch.x_star = p.position.par_iter().zip(p.velocity.par_iter()).map(|(x, u)| x + u * dt).collect();
+    sim.scratch.x_star = p
+        .position
+        .par_iter()
+        .zip(p.velocity.par_iter())
+        .map(|(x, u)| x + u * dt)
+        .collect();
 }
 
 fn update_neighbors(sim: &mut Simulation) {
@@ -240,7 +295,12 @@ fn update_neighbors(sim: &mut Simulation) {
     sim.neighbors = NeighborList::build(&sim.scratch.x_star, reach);
 }
 
-fn number_density<K: Kernel>(x: &[Vec2], nb: &NeighborList, contacts: &WallContacts, re: Real) -> Vec<Real> {
+fn number_density<K: Kernel>(
+    x: &[Vec2],
+    nb: &NeighborList,
+    contacts: &WallContacts,
+    re: Real,
+) -> Vec<Real> {
     (0..x.len())
         .into_par_iter()
         .map(|i| {
@@ -248,13 +308,23 @@ fn number_density<K: Kernel>(x: &[Vec2], nb: &NeighborList, contacts: &WallConta
             for &j in nb.of(i) {
                 n += K::w((x[j as usize] - x[i]).norm(), re);
             }
-            n + contacts.of(i).iter().map(|c| c.terms.number_density).sum::<Real>()
+            n + contacts
+                .of(i)
+                .iter()
+                .map(|c| c.terms.number_density)
+                .sum::<Real>()
         })
         .collect()
 }
 
 /// ∇·u ≈ -c Σ w'(r) r̂·(u_j - u_i): the HS form (paper 004 eq. 2), lattice-normalised.
-fn divergence<K: Kernel>(x: &[Vec2], u: &[Vec2], nb: &NeighborList, re: Real, c: Real) -> Vec<Real> {
+fn divergence<K: Kernel>(
+    x: &[Vec2],
+    u: &[Vec2],
+    nb: &NeighborList,
+    re: Real,
+    c: Real,
+) -> Vec<Real> {
     (0..x.len())
         .into_par_iter()
         .map(|i| {
@@ -273,7 +343,12 @@ fn divergence<K: Kernel>(x: &[Vec2], u: &[Vec2], nb: &NeighborList, re: Real, c:
 }
 
 fn compute_number_density<K: Kernel>(sim: &mut Simulation) {
-    sim.scratch.n_star = number_density::<K>(&sim.scratch.x_star, &sim.neighbors, &sim.contacts, sim.params.re);
+    sim.scratch.n_star = number_density::<K>(
+        &sim.scratch.x_star,
+        &sim.neighbors,
+        &sim.contacts,
+        sim.params.re,
+    );
 }
 
 /// Free surface: n* < beta n0, confirmed by a one-sided neighbourhood
@@ -314,7 +389,11 @@ fn detect_free_surface<K: Kernel>(sim: &mut Simulation) {
             if !surface {
                 return (false, 0.0);
             }
-            let value = if offset && m.norm() > 0.0 { (rho_g.dot(&(m / m.norm())) * 0.5 * l0).max(0.0) } else { 0.0 };
+            let value = if offset && m.norm() > 0.0 {
+                (rho_g.dot(&(m / m.norm())) * 0.5 * l0).max(0.0)
+            } else {
+                0.0
+            };
             (true, value)
         })
         .collect();
@@ -332,7 +411,13 @@ fn compute_neumann_gradients(sim: &mut Simulation) {
         .contacts
         .contacts
         .par_iter()
-        .map(|c| if extrapolate { (g - c.wall_acceleration) * rho } else { Vec2::zeros() })
+        .map(|c| {
+            if extrapolate {
+                (g - c.wall_acceleration) * rho
+            } else {
+                Vec2::zeros()
+            }
+        })
         .collect();
 }
 
@@ -340,12 +425,19 @@ fn compute_neumann_gradients(sim: &mut Simulation) {
 fn add_wall_divergence(div: &mut [Real], u: &[Vec2], contacts: &WallContacts, c: Real) {
     div.par_iter_mut().enumerate().for_each(|(i, d)| {
         for ct in contacts.of(i) {
-            *d -= c * ct.terms.number_density_gradient.dot(&(u[i] - ct.wall_velocity));
+            *d -= c * ct
+                .terms
+                .number_density_gradient
+                .dot(&(u[i] - ct.wall_velocity));
         }
     });
 }
 
-fn assemble_pressure_equation<K: Kernel>(sim: &mut Simulation, weights: &KernelWeights<K>, dt: Real) {
+fn assemble_pressure_equation<K: Kernel>(
+    sim: &mut Simulation,
+    weights: &KernelWeights<K>,
+    dt: Real,
+) {
     let np = sim.particles.len();
     let p = &sim.params;
     let (rho, n0, c_lap) = (p.density, p.n0, p.laplacian_coefficient);
@@ -354,7 +446,12 @@ fn assemble_pressure_equation<K: Kernel>(sim: &mut Simulation, weights: &KernelW
     let surface = &mut sim.particles.free_surface;
     // a particle with no Laplacian neighbour cannot be solved for: Dirichlet
     for i in 0..np {
-        if !surface[i] && nb.of(i).iter().all(|&j| weights.laplacian((x[j as usize] - x[i]).norm()) == 0.0) {
+        if !surface[i]
+            && nb
+                .of(i)
+                .iter()
+                .all(|&j| weights.laplacian((x[j as usize] - x[i]).norm()) == 0.0)
+        {
             surface[i] = true;
             sim.scratch.surface_pressure[i] = 0.0;
         }
@@ -370,8 +467,19 @@ fn assemble_pressure_equation<K: Kernel>(sim: &mut Simulation, weights: &KernelW
         }
     }
     // source term S of ∇²p - (rho alpha / dt²) p = S
-    let mut div_star = divergence::<K>(x, &sim.particles.velocity, nb, p.re, p.divergence_coefficient);
-    add_wall_divergence(&mut div_star, &sim.scratch.u_start, &sim.contacts, p.divergence_coefficient);
+    let mut div_star = divergence::<K>(
+        x,
+        &sim.particles.velocity,
+        nb,
+        p.re,
+        p.divergence_coefficient,
+    );
+    add_wall_divergence(
+        &mut div_star,
+        &sim.scratch.u_start,
+        &sim.contacts,
+        p.divergence_coefficient,
+    );
     let n_prev = &sim.particles.number_density;
     let div_prev = &sim.particles.number_density_rate;
     let n_star = &sim.scratch.n_star;
@@ -387,7 +495,9 @@ fn assemble_pressure_equation<K: Kernel>(sim: &mut Simulation, weights: &KernelW
                 let beta = (dt * div_prev[i]).abs();
                 rho / dt * (div_star[i] + alpha * div_prev[i]) - beta * rho / (dt * dt) * dev
             }
-            SourceKind::Mixed => rho / dt * div_star[i] - gamma * rho / (dt * dt) * (n_prev[i] - n0) / n0,
+            SourceKind::Mixed => {
+                rho / dt * div_star[i] - gamma * rho / (dt * dt) * (n_prev[i] - n0) / n0
+            }
         }
     };
     let compress = rho * sim.scheme.compressibility / (dt * dt);
@@ -447,7 +557,12 @@ fn assemble_pressure_equation<K: Kernel>(sim: &mut Simulation, weights: &KernelW
             (cols, vals, b)
         })
         .collect();
-    let mut m = CsrMatrix { n: nu, row_ptr: Vec::with_capacity(nu + 1), col: Vec::new(), val: Vec::new() };
+    let mut m = CsrMatrix {
+        n: nu,
+        row_ptr: Vec::with_capacity(nu + 1),
+        col: Vec::new(),
+        val: Vec::new(),
+    };
     m.row_ptr.push(0);
     let mut rhs = Vec::with_capacity(nu);
     for (cols, vals, b) in rows {
@@ -457,7 +572,10 @@ fn assemble_pressure_equation<K: Kernel>(sim: &mut Simulation, weights: &KernelW
         rhs.push(b);
     }
     // warm start from the last pressures
-    sim.scratch.solution = particle_of.iter().map(|&i| sim.particles.pressure[i as usize]).collect();
+    sim.scratch.solution = particle_of
+        .iter()
+        .map(|&i| sim.particles.pressure[i as usize])
+        .collect();
     sim.scratch.matrix = m;
     sim.scratch.rhs = rhs;
     sim.scratch.unknown_of = unknown_of;
@@ -465,10 +583,23 @@ fn assemble_pressure_equation<K: Kernel>(sim: &mut Simulation, weights: &KernelW
 }
 
 fn solve_pressure(sim: &mut Simulation) -> Result<(usize, Real), SimError> {
-    let params = SolveParams { tolerance: sim.scheme.solver_tolerance, max_iterations: sim.scheme.solver_max_iterations };
+    let params = SolveParams {
+        tolerance: sim.scheme.solver_tolerance,
+        max_iterations: sim.scheme.solver_max_iterations,
+    };
     let s = &mut sim.scratch;
-    let info = pressure::solve(sim.scheme.solver, &s.matrix, &s.rhs, &mut s.solution, params)
-        .map_err(|e| SimError::Solver { step: sim.steps + 1, time: sim.time, reason: e.to_string() })?;
+    let info = pressure::solve(
+        sim.scheme.solver,
+        &s.matrix,
+        &s.rhs,
+        &mut s.solution,
+        params,
+    )
+    .map_err(|e| SimError::Solver {
+        step: sim.steps + 1,
+        time: sim.time,
+        reason: e.to_string(),
+    })?;
     let clip = sim.scheme.clip_negative_pressure;
     let p = &mut sim.particles.pressure;
     p.copy_from_slice(&s.surface_pressure);
@@ -479,9 +610,20 @@ fn solve_pressure(sim: &mut Simulation) -> Result<(usize, Real), SimError> {
     Ok((info.iterations, info.relative_residual))
 }
 
-fn correct_velocity_and_position<K: Kernel>(sim: &mut Simulation, walls: &[PlacedWall], dt: Real, loads: &mut [WallLoad]) {
+fn correct_velocity_and_position<K: Kernel>(
+    sim: &mut Simulation,
+    walls: &[PlacedWall],
+    dt: Real,
+    loads: &mut [WallLoad],
+) {
     let prm = &sim.params;
-    let (re, rho, c_grad, m, n0) = (prm.re, prm.density, prm.gradient_coefficient, prm.particle_mass, prm.n0);
+    let (re, rho, c_grad, m, n0) = (
+        prm.re,
+        prm.density,
+        prm.gradient_coefficient,
+        prm.particle_mass,
+        prm.n0,
+    );
     let x = &sim.scratch.x_star;
     let p = &sim.particles.pressure;
     let nb = &sim.neighbors;
@@ -490,7 +632,11 @@ fn correct_velocity_and_position<K: Kernel>(sim: &mut Simulation, walls: &[Place
     let p_min: Vec<Real> = (0..n)
         .into_par_iter()
         .map(|i| {
-            nb.of(i).iter().filter(|&&j| (x[j as usize] - x[i]).norm() < re).map(|&j| p[j as usize]).fold(p[i], Real::min)
+            nb.of(i)
+                .iter()
+                .filter(|&&j| (x[j as usize] - x[i]).norm() < re)
+                .map(|&j| p[j as usize])
+                .fold(p[i], Real::min)
         })
         .collect();
     let form = sim.scheme.gradient;
@@ -510,7 +656,10 @@ fn correct_velocity_and_position<K: Kernel>(sim: &mut Simulation, walls: &[Place
         .map(|i| {
             let wall_contacts = contacts.of(i);
             if operator_gradient && wall_contacts.is_empty() {
-                return gradient_row::<K>(form, &cloud, lattice, i).iter().map(|&(j, g)| g * (p[j] - p[i])).sum();
+                return gradient_row::<K>(form, &cloud, lattice, i)
+                    .iter()
+                    .map(|&(j, g)| g * (p[j] - p[i]))
+                    .sum();
             }
             let base = contacts.offsets[i] as usize;
             let (mut s_fluid, mut s_min, mut s_sym) = (Vec2::zeros(), Vec2::zeros(), Vec2::zeros());
@@ -549,7 +698,9 @@ fn correct_velocity_and_position<K: Kernel>(sim: &mut Simulation, walls: &[Place
             match form {
                 GradientKind::MinimumPressure => classic,
                 GradientKind::Symmetric => (s_sym + wall_m1 * (2.0 * p[i]) + wall_linear) * c_grad,
-                GradientKind::Cmps => (s_sym + wall_m1 * (2.0 * (p[i] - p_min[i])) + wall_linear) * c_grad,
+                GradientKind::Cmps => {
+                    (s_sym + wall_m1 * (2.0 * (p[i] - p_min[i])) + wall_linear) * c_grad
+                }
                 _ => {
                     // GC: C = [(1/n0) Σ w r rᵀ / r²]⁻¹; on the full lattice C = d I.
                     let mm = moment / n0;
@@ -560,7 +711,9 @@ fn correct_velocity_and_position<K: Kernel>(sim: &mut Simulation, walls: &[Place
                     // water stays still), pushing particles apart where they cluster
                     let stabilizer = s_close * ((p[i] - p_min[i]) * kappa * c_grad);
                     match mm.try_inverse() {
-                        Some(c) if det > 0.3 * lattice_det => c * (s_fluid + wall_linear) / n0 + stabilizer,
+                        Some(c) if det > 0.3 * lattice_det => {
+                            c * (s_fluid + wall_linear) / n0 + stabilizer
+                        }
                         _ => classic,
                     }
                 }
@@ -573,7 +726,8 @@ fn correct_velocity_and_position<K: Kernel>(sim: &mut Simulation, walls: &[Place
     for i in 0..n {
         let base = contacts.offsets[i] as usize;
         for (k, c) in contacts.of(i).iter().enumerate() {
-            let gw = (c.terms.moment1 * (2.0 * p[i]) + c.terms.moment2_times(neumann[base + k])) * c_grad;
+            let gw = (c.terms.moment1 * (2.0 * p[i]) + c.terms.moment2_times(neumann[base + k]))
+                * c_grad;
             let f = gw * (m / rho);
             let load = &mut loads[c.object as usize];
             load.pressure_force += f;
@@ -582,7 +736,11 @@ fn correct_velocity_and_position<K: Kernel>(sim: &mut Simulation, walls: &[Place
     }
     let scale = dt / rho;
     let parts = &mut sim.particles;
-    parts.velocity.par_iter_mut().zip(total.par_iter()).for_each(|(u, g)| *u -= g * scale);
+    parts
+        .velocity
+        .par_iter_mut()
+        .zip(total.par_iter())
+        .for_each(|(u, g)| *u -= g * scale);
     parts
         .position
         .par_iter_mut()
@@ -593,14 +751,23 @@ fn correct_velocity_and_position<K: Kernel>(sim: &mut Simulation, walls: &[Place
 
 /// Safety net: pairwise collision below `collision_distance` l0 and an inelastic
 /// wall impulse below `wall_repulsion_distance` l0 (textbook values 0.5 and e = 0.2).
-fn keep_particles_apart(sim: &mut Simulation, walls: &[PlacedWall], dt: Real, loads: &mut [WallLoad]) {
+fn keep_particles_apart(
+    sim: &mut Simulation,
+    walls: &[PlacedWall],
+    dt: Real,
+    loads: &mut [WallLoad],
+) {
     let l0 = sim.params.l0;
     let e = sim.scheme.collision_restitution;
     let m = sim.params.particle_mass;
     let n = sim.particles.len();
     if sim.scheme.spacing_control == SpacingControl::Collision {
         let rc = sim.scheme.collision_distance * l0;
-        let (x, u, nb) = (&sim.particles.position, &sim.particles.velocity, &sim.neighbors);
+        let (x, u, nb) = (
+            &sim.particles.position,
+            &sim.particles.velocity,
+            &sim.neighbors,
+        );
         let du: Vec<Vec2> = (0..n)
             .into_par_iter()
             .map(|i| {
@@ -649,7 +816,8 @@ fn keep_particles_apart(sim: &mut Simulation, walls: &[PlacedWall], dt: Real, lo
                 let f = -du * (m / dt);
                 let load = &mut loads[c.object as usize];
                 load.repulsion_force += f;
-                load.moment += moment_about(walls[c.object as usize].state.center_of_mass, c.point, f);
+                load.moment +=
+                    moment_about(walls[c.object as usize].state.center_of_mass, c.point, f);
             }
         }
     }
@@ -657,7 +825,12 @@ fn keep_particles_apart(sim: &mut Simulation, walls: &[PlacedWall], dt: Real, lo
 
 fn update_number_density_and_divergence<K: Kernel>(sim: &mut Simulation) {
     let re = sim.params.re;
-    let (x, xs, nb, contacts) = (&sim.particles.position, &sim.scratch.x_star, &sim.neighbors, &sim.contacts);
+    let (x, xs, nb, contacts) = (
+        &sim.particles.position,
+        &sim.scratch.x_star,
+        &sim.neighbors,
+        &sim.contacts,
+    );
     let n: Vec<Real> = (0..x.len())
         .into_par_iter()
         .map(|i| {
@@ -666,20 +839,38 @@ fn update_number_density_and_divergence<K: Kernel>(sim: &mut Simulation) {
                 s += K::w((x[j as usize] - x[i]).norm(), re);
             }
             for c in contacts.of(i) {
-                s += (c.terms.number_density + c.terms.number_density_gradient.dot(&(x[i] - xs[i]))).max(0.0);
+                s += (c.terms.number_density
+                    + c.terms.number_density_gradient.dot(&(x[i] - xs[i])))
+                .max(0.0);
             }
             s
         })
         .collect();
-    let mut div = divergence::<K>(x, &sim.particles.velocity, nb, re, sim.params.divergence_coefficient);
-    add_wall_divergence(&mut div, &sim.particles.velocity, contacts, sim.params.divergence_coefficient);
+    let mut div = divergence::<K>(
+        x,
+        &sim.particles.velocity,
+        nb,
+        re,
+        sim.params.divergence_coefficient,
+    );
+    add_wall_divergence(
+        &mut div,
+        &sim.particles.velocity,
+        contacts,
+        sim.params.divergence_coefficient,
+    );
     sim.particles.number_density = n;
     sim.particles.number_density_rate = div;
 }
 
 fn remove_particles_outside_domain(sim: &mut Simulation) -> usize {
     let (lo, hi) = (sim.domain_min, sim.domain_max);
-    let keep: Vec<bool> = sim.particles.position.iter().map(|p| p.x >= lo.x && p.y >= lo.y && p.x <= hi.x && p.y <= hi.y).collect();
+    let keep: Vec<bool> = sim
+        .particles
+        .position
+        .iter()
+        .map(|p| p.x >= lo.x && p.y >= lo.y && p.x <= hi.x && p.y <= hi.y)
+        .collect();
     let removed = keep.iter().filter(|k| !**k).count();
     if removed > 0 {
         sim.particles.retain(&keep);
@@ -715,7 +906,10 @@ fn check_health(sim: &Simulation) -> Result<Real, SimError> {
         what,
     };
     if p.is_empty() {
-        return Err(SimError::NoParticles { step: sim.steps, time: sim.time });
+        return Err(SimError::NoParticles {
+            step: sim.steps,
+            time: sim.time,
+        });
     }
     let mut max_speed: Real = 0.0;
     for i in 0..p.len() {
@@ -731,10 +925,22 @@ fn check_health(sim: &Simulation) -> Result<Real, SimError> {
         }
         let s = u.norm();
         if s > sim.speed_limit {
-            return Err(fail(i, format!("runaway velocity {s:.3} m/s (limit {:.3} m/s)", sim.speed_limit)));
+            return Err(fail(
+                i,
+                format!(
+                    "runaway velocity {s:.3} m/s (limit {:.3} m/s)",
+                    sim.speed_limit
+                ),
+            ));
         }
         if p.number_density[i] > 4.0 * sim.params.n0 {
-            return Err(fail(i, format!("particle number density collapsed to {:.2} n0", p.number_density[i] / sim.params.n0)));
+            return Err(fail(
+                i,
+                format!(
+                    "particle number density collapsed to {:.2} n0",
+                    p.number_density[i] / sim.params.n0
+                ),
+            ));
         }
         max_speed = max_speed.max(s);
     }

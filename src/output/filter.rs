@@ -62,7 +62,12 @@ pub fn moving_average(start: Real, times: &[Real], values: &[Real], window: Real
     let h = 0.5 * w;
     let lower = |k: usize| if k == 0 { start } else { times[k - 1] };
     for k in 0..n {
-        assert!(times[k] > lower(k), "times must increase ({} after {})", times[k], lower(k));
+        assert!(
+            times[k] > lower(k),
+            "times must increase ({} after {})",
+            times[k],
+            lower(k)
+        );
     }
     // first interval whose end is > x
     let first_after = |x: Real| times.partition_point(|t| *t <= x);
@@ -81,7 +86,8 @@ pub fn moving_average(start: Real, times: &[Real], values: &[Real], window: Real
             let reach = start + (start - (a0 - h));
             let mut j = 0;
             while j < n && lower(j) < reach {
-                sum += values[j] * box_overlap(a0, a1, 2.0 * start - times[j], 2.0 * start - lower(j), h);
+                sum += values[j]
+                    * box_overlap(a0, a1, 2.0 * start - times[j], 2.0 * start - lower(j), h);
                 j += 1;
             }
         }
@@ -90,7 +96,8 @@ pub fn moving_average(start: Real, times: &[Real], values: &[Real], window: Real
             let reach = end - (a1 + h - end);
             let mut j = first_after(reach);
             while j < n {
-                sum += values[j] * box_overlap(a0, a1, 2.0 * end - times[j], 2.0 * end - lower(j), h);
+                sum +=
+                    values[j] * box_overlap(a0, a1, 2.0 * end - times[j], 2.0 * end - lower(j), h);
                 j += 1;
             }
         }
@@ -119,10 +126,18 @@ pub fn impulse(start: Real, times: &[Real], values: &[Real]) -> Real {
 /// [`DEFAULT_WINDOW_SAMPLES`] load intervals (or max_dt when loads are written every step).
 /// Never below one load interval.
 pub fn filter_window(case: &Case) -> Real {
-    if let Some(w) = case.output.filter_window.filter(|w| *w > 0.0 && w.is_finite()) {
+    if let Some(w) = case
+        .output
+        .filter_window
+        .filter(|w| *w > 0.0 && w.is_finite())
+    {
         return w;
     }
-    let sample = case.output.load_interval.filter(|v| *v > 0.0).unwrap_or(case.time.max_dt);
+    let sample = case
+        .output
+        .load_interval
+        .filter(|v| *v > 0.0)
+        .unwrap_or(case.time.max_dt);
     let passage = case
         .bodies
         .iter()
@@ -132,7 +147,9 @@ pub fn filter_window(case: &Case) -> Real {
             let beta = leading_deadrise(&b.polygon, b.angle, *velocity)?;
             Some(2.0 * case.particle_spacing * beta.tan() / (std::f64::consts::PI * speed))
         })
-        .fold(None, |acc: Option<Real>, p| Some(acc.map_or(p, |a| a.min(p))));
+        .fold(None, |acc: Option<Real>, p| {
+            Some(acc.map_or(p, |a| a.min(p)))
+        });
     match passage {
         Some(p) => (WEDGE_WINDOW_PERIODS * p).max(sample),
         None => DEFAULT_WINDOW_SAMPLES * sample,
@@ -150,7 +167,10 @@ pub fn leading_deadrise(polygon: &[[Real; 2]], angle: Real, velocity: [Real; 2])
     }
     let d = [velocity[0] / speed, velocity[1] / speed];
     let (s, c) = angle.sin_cos();
-    let pts: Vec<[Real; 2]> = polygon.iter().map(|p| [c * p[0] - s * p[1], s * p[0] + c * p[1]]).collect();
+    let pts: Vec<[Real; 2]> = polygon
+        .iter()
+        .map(|p| [c * p[0] - s * p[1], s * p[0] + c * p[1]])
+        .collect();
     let ahead = |p: &[Real; 2]| p[0] * d[0] + p[1] * d[1];
     let lead = (0..pts.len()).max_by(|&a, &b| ahead(&pts[a]).total_cmp(&ahead(&pts[b])))?;
     let n = pts.len();
@@ -193,19 +213,40 @@ fn invalid(message: String) -> io::Error {
 
 /// Parse the text of `loads.csv` (header `time,body,fx,fy,mz`).
 pub fn parse_loads_csv(text: &str) -> io::Result<Vec<LoadRow>> {
-    let mut reader = csv::ReaderBuilder::new().has_headers(true).from_reader(text.as_bytes());
-    let headers = reader.headers().map_err(|e| invalid(format!("loads.csv header: {e}")))?.clone();
+    let mut reader = csv::ReaderBuilder::new()
+        .has_headers(true)
+        .from_reader(text.as_bytes());
+    let headers = reader
+        .headers()
+        .map_err(|e| invalid(format!("loads.csv header: {e}")))?
+        .clone();
     let expected: Vec<&str> = super::LOADS_HEADER.split(',').collect();
     if headers.iter().collect::<Vec<_>>() != expected {
-        return Err(invalid(format!("loads.csv header is {:?}, expected {}", headers, super::LOADS_HEADER)));
+        return Err(invalid(format!(
+            "loads.csv header is {:?}, expected {}",
+            headers,
+            super::LOADS_HEADER
+        )));
     }
     let mut rows = Vec::new();
     for (line, record) in reader.records().enumerate() {
         let record = record.map_err(|e| invalid(format!("loads.csv row {}: {e}", line + 2)))?;
         let num = |i: usize| -> io::Result<Real> {
-            record[i].trim().parse().map_err(|e| invalid(format!("loads.csv row {} column {}: {e}", line + 2, expected[i])))
+            record[i].trim().parse().map_err(|e| {
+                invalid(format!(
+                    "loads.csv row {} column {}: {e}",
+                    line + 2,
+                    expected[i]
+                ))
+            })
         };
-        rows.push(LoadRow { time: num(0)?, body: record[1].to_string(), fx: num(2)?, fy: num(3)?, mz: num(4)? });
+        rows.push(LoadRow {
+            time: num(0)?,
+            body: record[1].to_string(),
+            fx: num(2)?,
+            fy: num(3)?,
+            mz: num(4)?,
+        });
     }
     Ok(rows)
 }
@@ -222,7 +263,9 @@ pub fn filter_loads_csv(text: &str, window_s: f64) -> io::Result<String> {
     for indices in by_body.values() {
         let times: Vec<Real> = indices.iter().map(|&i| rows[i].time).collect();
         if times.windows(2).any(|w| w[1] <= w[0]) || times.first().is_some_and(|t| *t <= 0.0) {
-            return Err(invalid("loads.csv times of a body must be positive and increase".to_string()));
+            return Err(invalid(
+                "loads.csv times of a body must be positive and increase".to_string(),
+            ));
         }
         for c in 0..3 {
             let values: Vec<Real> = indices.iter().map(|&i| filtered[i][c]).collect();
@@ -236,7 +279,10 @@ pub fn filter_loads_csv(text: &str, window_s: f64) -> io::Result<String> {
     out.push_str(super::LOADS_HEADER);
     out.push('\n');
     for (r, [fx, fy, mz]) in rows.iter().zip(filtered) {
-        out.push_str(&format!("{:.9e},{},{fx:.9e},{fy:.9e},{mz:.9e}\n", r.time, r.body));
+        out.push_str(&format!(
+            "{:.9e},{},{fx:.9e},{fy:.9e},{mz:.9e}\n",
+            r.time, r.body
+        ));
     }
     Ok(out)
 }

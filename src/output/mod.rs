@@ -69,14 +69,27 @@ impl RunWriter {
             names: wall_names,
             impulse: vec![[0.0; 3]; n],
             loads: csv_file(&dir.join("loads.csv"), LOADS_HEADER)?,
-            bodies: if has_bodies { Some(csv_file(&dir.join("bodies.csv"), BODIES_HEADER)?) } else { None },
-            probes: if probes.is_empty() { None } else { Some((csv_file(&dir.join("probes.csv"), PROBES_HEADER)?, probes)) },
+            bodies: if has_bodies {
+                Some(csv_file(&dir.join("bodies.csv"), BODIES_HEADER)?)
+            } else {
+                None
+            },
+            probes: if probes.is_empty() {
+                None
+            } else {
+                Some((csv_file(&dir.join("probes.csv"), PROBES_HEADER)?, probes))
+            },
         })
     }
 
     /// Record the step that just ended (`dt` long, ending at `sim.time`); write rows when a
     /// sample time is reached.
-    pub fn record(&mut self, sim: &Simulation, dt: Real, bodies: &[BodySample]) -> std::io::Result<()> {
+    pub fn record(
+        &mut self,
+        sim: &Simulation,
+        dt: Real,
+        bodies: &[BodySample],
+    ) -> std::io::Result<()> {
         for (k, l) in sim.loads.iter().enumerate() {
             self.impulse[k][0] += l.force.x * dt;
             self.impulse[k][1] += l.force.y * dt;
@@ -97,13 +110,23 @@ impl RunWriter {
         let span = (t - self.last_sample).max(Real::MIN_POSITIVE);
         for (k, name) in self.names.iter().enumerate() {
             let [fx, fy, mz] = self.impulse[k];
-            writeln!(self.loads, "{t:.9e},{name},{:.9e},{:.9e},{:.9e}", fx / span, fy / span, mz / span)?;
+            writeln!(
+                self.loads,
+                "{t:.9e},{name},{:.9e},{:.9e},{:.9e}",
+                fx / span,
+                fy / span,
+                mz / span
+            )?;
             self.impulse[k] = [0.0; 3];
         }
         self.loads.flush()?;
         if let Some(w) = &mut self.bodies {
             for b in bodies {
-                writeln!(w, "{t:.9e},{},{:.9e},{:.9e},{:.9e},{:.9e},{:.9e},{:.9e}", b.name, b.x, b.y, b.angle, b.vx, b.vy, b.omega)?;
+                writeln!(
+                    w,
+                    "{t:.9e},{},{:.9e},{:.9e},{:.9e},{:.9e},{:.9e},{:.9e}",
+                    b.name, b.x, b.y, b.angle, b.vx, b.vy, b.omega
+                )?;
             }
             w.flush()?;
         }

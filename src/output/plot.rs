@@ -38,12 +38,20 @@ fn colour(i: usize) -> RGBColor {
 
 /// [lo, hi] of finite values, widened when empty or flat.
 fn padded_range(values: impl Iterator<Item = f64>) -> (f64, f64) {
-    let (lo, hi) = values.filter(|v| v.is_finite()).fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), v| (a.min(v), b.max(v)));
+    let (lo, hi) = values
+        .filter(|v| v.is_finite())
+        .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), v| {
+            (a.min(v), b.max(v))
+        });
     if !lo.is_finite() {
         return (0.0, 1.0);
     }
     let span = hi - lo;
-    let pad = if span > 0.0 { 0.05 * span } else { lo.abs().max(1.0) * 0.05 };
+    let pad = if span > 0.0 {
+        0.05 * span
+    } else {
+        lo.abs().max(1.0) * 0.05
+    };
     (lo - pad, hi + pad)
 }
 
@@ -59,10 +67,17 @@ pub fn loads_svg(csv_text: &str, title: &str) -> Result<String, PlotError> {
         if !series.contains_key(&r.body) {
             order.push(r.body.clone());
         }
-        series.entry(r.body.clone()).or_default().push((r.time, [r.fx, r.fy, r.mz]));
+        series
+            .entry(r.body.clone())
+            .or_default()
+            .push((r.time, [r.fx, r.fy, r.mz]));
     }
     let (t0, t1) = padded_range(rows.iter().map(|r| r.time));
-    let panels = [("fx (N/m)", "horizontal force fx"), ("fy (N/m)", "vertical force fy"), ("mz (N·m/m)", "moment mz")];
+    let panels = [
+        ("fx (N/m)", "horizontal force fx"),
+        ("fy (N/m)", "vertical force fy"),
+        ("mz (N·m/m)", "moment mz"),
+    ];
 
     let mut svg = String::new();
     {
@@ -87,14 +102,19 @@ pub fn loads_svg(csv_text: &str, title: &str) -> Result<String, PlotError> {
                 .draw()
                 .map_err(drawing)?;
             for (b, name) in order.iter().enumerate() {
-                let points: Vec<(f64, f64)> =
-                    series[name].iter().filter(|(t, v)| t.is_finite() && v[c].is_finite()).map(|(t, v)| (*t, v[c])).collect();
+                let points: Vec<(f64, f64)> = series[name]
+                    .iter()
+                    .filter(|(t, v)| t.is_finite() && v[c].is_finite())
+                    .map(|(t, v)| (*t, v[c]))
+                    .collect();
                 let color = colour(b);
                 chart
                     .draw_series(LineSeries::new(points, color.stroke_width(2)))
                     .map_err(drawing)?
                     .label(name.as_str())
-                    .legend(move |(x, y)| Rectangle::new([(x, y - 4), (x + 16, y + 4)], color.filled()));
+                    .legend(move |(x, y)| {
+                        Rectangle::new([(x, y - 4), (x + 16, y + 4)], color.filled())
+                    });
             }
             if !order.is_empty() {
                 chart
@@ -119,7 +139,11 @@ pub struct Series {
 }
 
 fn log_range(values: impl Iterator<Item = f64>) -> (f64, f64) {
-    let (lo, hi) = values.filter(|v| v.is_finite() && *v > 0.0).fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), v| (a.min(v), b.max(v)));
+    let (lo, hi) = values
+        .filter(|v| v.is_finite() && *v > 0.0)
+        .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), v| {
+            (a.min(v), b.max(v))
+        });
     if !lo.is_finite() {
         return (0.1, 10.0);
     }
@@ -128,10 +152,23 @@ fn log_range(values: impl Iterator<Item = f64>) -> (f64, f64) {
 
 /// A log-log plot, one line (with point markers) per series, joining its points in
 /// the order given: the benchmark's error against wall time.
-pub fn log_log_svg(title: &str, x_label: &str, y_label: &str, series: &[Series]) -> Result<String, PlotError> {
+pub fn log_log_svg(
+    title: &str,
+    x_label: &str,
+    y_label: &str,
+    series: &[Series],
+) -> Result<String, PlotError> {
     let keep = |(x, y): &(f64, f64)| x.is_finite() && y.is_finite() && *x > 0.0 && *y > 0.0;
-    let (x0, x1) = log_range(series.iter().flat_map(|s| s.points.iter().filter(|p| keep(p)).map(|p| p.0)));
-    let (y0, y1) = log_range(series.iter().flat_map(|s| s.points.iter().filter(|p| keep(p)).map(|p| p.1)));
+    let (x0, x1) = log_range(
+        series
+            .iter()
+            .flat_map(|s| s.points.iter().filter(|p| keep(p)).map(|p| p.0)),
+    );
+    let (y0, y1) = log_range(
+        series
+            .iter()
+            .flat_map(|s| s.points.iter().filter(|p| keep(p)).map(|p| p.1)),
+    );
     let mut svg = String::new();
     {
         let root = SVGBackend::with_string(&mut svg, (800, 600)).into_drawing_area();
@@ -143,7 +180,12 @@ pub fn log_log_svg(title: &str, x_label: &str, y_label: &str, series: &[Series])
             .y_label_area_size(70)
             .build_cartesian_2d((x0..x1).log_scale(), (y0..y1).log_scale())
             .map_err(drawing)?;
-        chart.configure_mesh().x_desc(x_label).y_desc(y_label).draw().map_err(drawing)?;
+        chart
+            .configure_mesh()
+            .x_desc(x_label)
+            .y_desc(y_label)
+            .draw()
+            .map_err(drawing)?;
         let mut labelled = false;
         for (i, s) in series.iter().enumerate() {
             // in the given order (the benchmark gives coarse to fine spacing)
@@ -156,8 +198,16 @@ pub fn log_log_svg(title: &str, x_label: &str, y_label: &str, series: &[Series])
                 .draw_series(LineSeries::new(points.clone(), color.stroke_width(2)))
                 .map_err(drawing)?
                 .label(s.name.as_str())
-                .legend(move |(x, y)| Rectangle::new([(x, y - 4), (x + 16, y + 4)], color.filled()));
-            chart.draw_series(points.into_iter().map(|p| Circle::new(p, 4, color.filled()))).map_err(drawing)?;
+                .legend(move |(x, y)| {
+                    Rectangle::new([(x, y - 4), (x + 16, y + 4)], color.filled())
+                });
+            chart
+                .draw_series(
+                    points
+                        .into_iter()
+                        .map(|p| Circle::new(p, 4, color.filled())),
+                )
+                .map_err(drawing)?;
             labelled = true;
         }
         if labelled {

@@ -40,10 +40,17 @@ impl SnapshotWriter {
     /// None when no snapshot interval is set: no writer exists. Creates
     /// `dir/snapshots/` with an empty (valid) collection.
     pub fn create(dir: &Path, interval: Option<f64>) -> std::io::Result<Option<Self>> {
-        let Some(interval) = interval.filter(|i| *i > 0.0 && i.is_finite()) else { return Ok(None) };
+        let Some(interval) = interval.filter(|i| *i > 0.0 && i.is_finite()) else {
+            return Ok(None);
+        };
         let dir = dir.join(SNAPSHOT_DIR);
         std::fs::create_dir_all(&dir)?;
-        let writer = Self { dir, interval, next_time: 0.0, entries: Vec::new() };
+        let writer = Self {
+            dir,
+            interval,
+            next_time: 0.0,
+            entries: Vec::new(),
+        };
         writer.write_collection()?;
         Ok(Some(writer))
     }
@@ -68,7 +75,10 @@ impl SnapshotWriter {
         };
         let file = snapshot_file_name(sim.steps);
         write_atomically(&self.dir.join(&file), &vtu_string(&fields, sim.time))?;
-        self.entries.push(PvdEntry { time: sim.time, file });
+        self.entries.push(PvdEntry {
+            time: sim.time,
+            file,
+        });
         self.write_collection()?;
         while self.next_time <= sim.time + 1e-9 * self.interval {
             self.next_time += self.interval;

@@ -23,7 +23,10 @@ pub struct VtuFields<'a> {
 }
 
 fn push_scalars(out: &mut String, name: &str, kind: &str, values: impl Iterator<Item = String>) {
-    let _ = writeln!(out, "        <DataArray type=\"{kind}\" Name=\"{name}\" format=\"ascii\">");
+    let _ = writeln!(
+        out,
+        "        <DataArray type=\"{kind}\" Name=\"{name}\" format=\"ascii\">"
+    );
     push_wrapped(out, values);
     out.push_str("        </DataArray>\n");
 }
@@ -70,21 +73,65 @@ pub fn vtu_string(fields: &VtuFields<'_>, time: Real) -> String {
         "      <DataArray type=\"Float64\" Name=\"TimeValue\" NumberOfTuples=\"1\" format=\"ascii\">{time:.12e}</DataArray>"
     );
     out.push_str("    </FieldData>\n");
-    let _ = writeln!(out, "    <Piece NumberOfPoints=\"{n}\" NumberOfCells=\"{n}\">");
+    let _ = writeln!(
+        out,
+        "    <Piece NumberOfPoints=\"{n}\" NumberOfCells=\"{n}\">"
+    );
     out.push_str("      <PointData Scalars=\"pressure\" Vectors=\"velocity\">\n");
     let _ = writeln!(out, "        <DataArray type=\"Float64\" Name=\"velocity\" NumberOfComponents=\"3\" format=\"ascii\">");
-    push_wrapped(&mut out, fields.velocity.iter().flat_map(|v| [format!("{:.9e}", v.x), format!("{:.9e}", v.y), "0".to_string()]));
+    push_wrapped(
+        &mut out,
+        fields.velocity.iter().flat_map(|v| {
+            [
+                format!("{:.9e}", v.x),
+                format!("{:.9e}", v.y),
+                "0".to_string(),
+            ]
+        }),
+    );
     out.push_str("        </DataArray>\n");
-    push_scalars(&mut out, "pressure", "Float64", fields.pressure.iter().map(|p| format!("{p:.9e}")));
-    push_scalars(&mut out, "number_density", "Float64", fields.number_density.iter().map(|v| format!("{v:.9e}")));
+    push_scalars(
+        &mut out,
+        "pressure",
+        "Float64",
+        fields.pressure.iter().map(|p| format!("{p:.9e}")),
+    );
+    push_scalars(
+        &mut out,
+        "number_density",
+        "Float64",
+        fields.number_density.iter().map(|v| format!("{v:.9e}")),
+    );
     if let Some(n0) = fields.n0.filter(|n0| *n0 > 0.0) {
-        push_scalars(&mut out, "number_density_ratio", "Float64", fields.number_density.iter().map(|v| format!("{:.9e}", v / n0)));
+        push_scalars(
+            &mut out,
+            "number_density_ratio",
+            "Float64",
+            fields
+                .number_density
+                .iter()
+                .map(|v| format!("{:.9e}", v / n0)),
+        );
     }
-    push_scalars(&mut out, "free_surface", "UInt8", fields.free_surface.iter().map(|f| u8::from(*f).to_string()));
+    push_scalars(
+        &mut out,
+        "free_surface",
+        "UInt8",
+        fields.free_surface.iter().map(|f| u8::from(*f).to_string()),
+    );
     out.push_str("      </PointData>\n");
     out.push_str("      <Points>\n");
     out.push_str("        <DataArray type=\"Float64\" Name=\"position\" NumberOfComponents=\"3\" format=\"ascii\">\n");
-    push_wrapped(&mut out, fields.position.iter().flat_map(|p| [format!("{:.9e}", p.x), format!("{:.9e}", p.y), "0".to_string()]));
+    push_wrapped(
+        &mut out,
+        fields.position.iter().flat_map(|p| {
+            [
+                format!("{:.9e}", p.x),
+                format!("{:.9e}", p.y),
+                "0".to_string(),
+            ]
+        }),
+    );
     out.push_str("        </DataArray>\n");
     out.push_str("      </Points>\n");
     out.push_str("      <Cells>\n");
@@ -133,11 +180,17 @@ pub fn pvd_string(entries: &[PvdEntry]) -> String {
 }
 
 fn xml_escape(s: &str) -> String {
-    s.replace('&', "&amp;").replace('"', "&quot;").replace('<', "&lt;").replace('>', "&gt;")
+    s.replace('&', "&amp;")
+        .replace('"', "&quot;")
+        .replace('<', "&lt;")
+        .replace('>', "&gt;")
 }
 
 fn xml_unescape(s: &str) -> String {
-    s.replace("&quot;", "\"").replace("&lt;", "<").replace("&gt;", ">").replace("&amp;", "&")
+    s.replace("&quot;", "\"")
+        .replace("&lt;", "<")
+        .replace("&gt;", ">")
+        .replace("&amp;", "&")
 }
 
 fn bad(message: impl Into<String>) -> io::Error {
@@ -166,29 +219,46 @@ fn next_tag(text: &str, name: &str, from: usize) -> io::Result<Option<Tag>> {
             at = after;
             continue;
         }
-        let close = text[after..].find('>').ok_or_else(|| bad(format!("unterminated <{name}> tag")))? + after;
+        let close = text[after..]
+            .find('>')
+            .ok_or_else(|| bad(format!("unterminated <{name}> tag")))?
+            + after;
         let inner = &text[after..close];
         let self_closing = inner.trim_end().ends_with('/');
         let inner = inner.trim_end().trim_end_matches('/');
         let mut attributes = BTreeMap::new();
         let mut rest = inner.trim_start();
         while !rest.is_empty() {
-            let eq = rest.find('=').ok_or_else(|| bad(format!("malformed attribute in <{name}>: {rest}")))?;
+            let eq = rest
+                .find('=')
+                .ok_or_else(|| bad(format!("malformed attribute in <{name}>: {rest}")))?;
             let key = rest[..eq].trim().to_string();
             let after_eq = rest[eq + 1..].trim_start();
-            let quoted = after_eq.strip_prefix('"').ok_or_else(|| bad(format!("unquoted attribute {key} in <{name}>")))?;
-            let end_q = quoted.find('"').ok_or_else(|| bad(format!("unterminated attribute {key} in <{name}>")))?;
+            let quoted = after_eq
+                .strip_prefix('"')
+                .ok_or_else(|| bad(format!("unquoted attribute {key} in <{name}>")))?;
+            let end_q = quoted
+                .find('"')
+                .ok_or_else(|| bad(format!("unterminated attribute {key} in <{name}>")))?;
             attributes.insert(key, xml_unescape(&quoted[..end_q]));
             rest = quoted[end_q + 1..].trim_start();
         }
-        return Ok(Some(Tag { attributes, self_closing, end: close + 1 }));
+        return Ok(Some(Tag {
+            attributes,
+            self_closing,
+            end: close + 1,
+        }));
     }
     Ok(None)
 }
 
 /// The `.pvd` entries in file order.
 pub fn parse_pvd(text: &str) -> io::Result<Vec<PvdEntry>> {
-    if next_tag(text, "VTKFile", 0)?.and_then(|t| t.attributes.get("type").cloned()).as_deref() != Some("Collection") {
+    if next_tag(text, "VTKFile", 0)?
+        .and_then(|t| t.attributes.get("type").cloned())
+        .as_deref()
+        != Some("Collection")
+    {
         return Err(bad("not a VTK Collection file"));
     }
     if !text.trim_end().ends_with("</VTKFile>") {
@@ -203,7 +273,11 @@ pub fn parse_pvd(text: &str) -> io::Result<Vec<PvdEntry>> {
             .ok_or_else(|| bad("DataSet without timestep"))?
             .parse::<Real>()
             .map_err(|e| bad(format!("timestep: {e}")))?;
-        let file = tag.attributes.get("file").ok_or_else(|| bad("DataSet without file"))?.clone();
+        let file = tag
+            .attributes
+            .get("file")
+            .ok_or_else(|| bad("DataSet without file"))?
+            .clone();
         entries.push(PvdEntry { time, file });
         at = tag.end;
     }
@@ -223,7 +297,10 @@ pub struct VtuData {
 impl VtuData {
     /// A scalar point-data array by name.
     pub fn scalar(&self, name: &str) -> Option<&[Real]> {
-        self.point_data.get(name).filter(|(c, _)| *c == 1).map(|(_, v)| v.as_slice())
+        self.point_data
+            .get(name)
+            .filter(|(c, _)| *c == 1)
+            .map(|(_, v)| v.as_slice())
     }
 }
 
@@ -235,10 +312,16 @@ fn data_array_values(text: &str, tag: &Tag) -> io::Result<Vec<Real>> {
     if tag.attributes.get("format").map(String::as_str) != Some("ascii") {
         return Err(bad("only ASCII DataArrays are read"));
     }
-    let close = text[tag.end..].find("</DataArray>").ok_or_else(|| bad("unterminated DataArray"))? + tag.end;
+    let close = text[tag.end..]
+        .find("</DataArray>")
+        .ok_or_else(|| bad("unterminated DataArray"))?
+        + tag.end;
     text[tag.end..close]
         .split_ascii_whitespace()
-        .map(|s| s.parse::<Real>().map_err(|e| bad(format!("DataArray value {s:?}: {e}"))))
+        .map(|s| {
+            s.parse::<Real>()
+                .map_err(|e| bad(format!("DataArray value {s:?}: {e}")))
+        })
         .collect()
 }
 
@@ -262,7 +345,10 @@ pub fn parse_vtu(text: &str) -> io::Result<VtuData> {
     };
     let n = count("NumberOfPoints")?;
     let cells = count("NumberOfCells")?;
-    let mut data = VtuData { cells, ..Default::default() };
+    let mut data = VtuData {
+        cells,
+        ..Default::default()
+    };
     // time from FieldData
     let mut at = root.end;
     while let Some(tag) = next_tag(text, "DataArray", at)? {
@@ -275,15 +361,25 @@ pub fn parse_vtu(text: &str) -> io::Result<VtuData> {
         at = tag.end;
     }
     let section = |name: &str| -> io::Result<Option<(usize, usize)>> {
-        let Some(open) = next_tag(text, name, piece.end)? else { return Ok(None) };
-        let close = text[open.end..].find(&format!("</{name}>")).ok_or_else(|| bad(format!("unterminated <{name}>")))? + open.end;
+        let Some(open) = next_tag(text, name, piece.end)? else {
+            return Ok(None);
+        };
+        let close = text[open.end..]
+            .find(&format!("</{name}>"))
+            .ok_or_else(|| bad(format!("unterminated <{name}>")))?
+            + open.end;
         Ok(Some((open.end, close)))
     };
     if let Some((start, end)) = section("Points")? {
-        let tag = next_tag(text, "DataArray", start)?.filter(|t| t.end <= end).ok_or_else(|| bad("Points without DataArray"))?;
+        let tag = next_tag(text, "DataArray", start)?
+            .filter(|t| t.end <= end)
+            .ok_or_else(|| bad("Points without DataArray"))?;
         let values = data_array_values(text, &tag)?;
         if values.len() != 3 * n {
-            return Err(bad(format!("{} point coordinates for {n} points", values.len())));
+            return Err(bad(format!(
+                "{} point coordinates for {n} points",
+                values.len()
+            )));
         }
         data.points = values.chunks_exact(3).map(|c| [c[0], c[1], c[2]]).collect();
     } else {
@@ -292,12 +388,23 @@ pub fn parse_vtu(text: &str) -> io::Result<VtuData> {
     if let Some((start, end)) = section("PointData")? {
         let mut at = start;
         while let Some(tag) = next_tag(text, "DataArray", at)?.filter(|t| t.end <= end) {
-            let name = tag.attributes.get("Name").cloned().ok_or_else(|| bad("point DataArray without Name"))?;
-            let components: usize =
-                tag.attributes.get("NumberOfComponents").map(|c| c.parse().map_err(|e| bad(format!("{e}")))).transpose()?.unwrap_or(1);
+            let name = tag
+                .attributes
+                .get("Name")
+                .cloned()
+                .ok_or_else(|| bad("point DataArray without Name"))?;
+            let components: usize = tag
+                .attributes
+                .get("NumberOfComponents")
+                .map(|c| c.parse().map_err(|e| bad(format!("{e}"))))
+                .transpose()?
+                .unwrap_or(1);
             let values = data_array_values(text, &tag)?;
             if values.len() != components * n {
-                return Err(bad(format!("point data {name}: {} values for {n} points x {components}", values.len())));
+                return Err(bad(format!(
+                    "point data {name}: {} values for {n} points x {components}",
+                    values.len()
+                )));
             }
             data.point_data.insert(name, (components, values));
             at = tag.end;
@@ -309,7 +416,9 @@ pub fn parse_vtu(text: &str) -> io::Result<VtuData> {
             let len = data_array_values(text, &tag)?.len();
             let name = tag.attributes.get("Name").cloned().unwrap_or_default();
             if matches!(name.as_str(), "offsets" | "types") && len != cells {
-                return Err(bad(format!("cell array {name}: {len} values for {cells} cells")));
+                return Err(bad(format!(
+                    "cell array {name}: {len} values for {cells} cells"
+                )));
             }
             at = tag.end;
         }

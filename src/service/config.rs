@@ -51,7 +51,10 @@ impl Config {
     }
 
     pub fn database_url(&self) -> String {
-        format!("sqlite://{}?mode=rwc", self.data_dir.join("jobs.db").display())
+        format!(
+            "sqlite://{}?mode=rwc",
+            self.data_dir.join("jobs.db").display()
+        )
     }
 
     pub fn job_dir(&self, id: &uuid::Uuid) -> PathBuf {

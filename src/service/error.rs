@@ -98,7 +98,9 @@ impl IntoResponse for ApiError {
         });
         let mut response = (status, Json(body)).into_response();
         if let Self::QueueFull { retry_after_s, .. } = self {
-            response.headers_mut().insert(header::RETRY_AFTER, HeaderValue::from(retry_after_s));
+            response
+                .headers_mut()
+                .insert(header::RETRY_AFTER, HeaderValue::from(retry_after_s));
         }
         response
     }

@@ -38,4 +38,6 @@ pub const OPENAPI_YAML: &str = include_str!("../../api/openapi.yaml");
 /// The case a `POST /v1/jobs` with an empty body runs (DESIGN.md §4: the 30° wedge).
 /// `None` until `cases/wedge_30deg_constant_velocity.json` is on this branch; switch to
 /// `Some(include_str!("../../cases/wedge_30deg_constant_velocity.json"))` then.
-pub const DEFAULT_CASE: Option<&str> = Some(include_str!("../../cases/wedge_30deg_constant_velocity.json"));
+pub const DEFAULT_CASE: Option<&str> = Some(include_str!(
+    "../../cases/wedge_30deg_constant_velocity.json"
+));

@@ -14,10 +14,16 @@ pub fn loads_svg(title: &str, rows: &[(String, f64, [f64; 3])]) -> Result<String
     {
         let root = SVGBackend::with_string(&mut svg, (900, 960)).into_drawing_area();
         root.fill(&WHITE).map_err(|e| e.to_string())?;
-        let root = root.titled(title, ("sans-serif", 22)).map_err(|e| e.to_string())?;
+        let root = root
+            .titled(title, ("sans-serif", 22))
+            .map_err(|e| e.to_string())?;
         if rows.is_empty() {
-            root.draw(&Text::new("no load samples yet", (350, 400), ("sans-serif", 18)))
-                .map_err(|e| e.to_string())?;
+            root.draw(&Text::new(
+                "no load samples yet",
+                (350, 400),
+                ("sans-serif", 18),
+            ))
+            .map_err(|e| e.to_string())?;
         } else {
             let (t0, t1) = range(rows.iter().map(|r| r.1));
             let panels = root.split_evenly((3, 1));
@@ -43,7 +49,9 @@ pub fn loads_svg(title: &str, rows: &[(String, f64, [f64; 3])]) -> Result<String
                         .draw_series(LineSeries::new(points, color.stroke_width(2)))
                         .map_err(|e| e.to_string())?
                         .label(name.to_string())
-                        .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 20, y)], color.stroke_width(2)));
+                        .legend(move |(x, y)| {
+                            PathElement::new(vec![(x, y), (x + 20, y)], color.stroke_width(2))
+                        });
                 }
                 chart
                     .configure_series_labels()
@@ -68,6 +76,8 @@ fn range(values: impl Iterator<Item = f64>) -> (f64, f64) {
     if !lo.is_finite() {
         return (0.0, 1.0);
     }
-    let pad = ((hi - lo) * 0.05).max(hi.abs().max(lo.abs()) * 1e-3).max(1e-12);
+    let pad = ((hi - lo) * 0.05)
+        .max(hi.abs().max(lo.abs()) * 1e-3)
+        .max(1e-12);
     (lo - pad, hi + pad)
 }

@@ -34,13 +34,37 @@ pub fn endpoints() -> Vec<(Method, &'static str, MethodRouter<AppState>)> {
         (Method::POST, "/v1/jobs", on(MethodFilter::POST, submit_job)),
         (Method::GET, "/v1/jobs", on(MethodFilter::GET, list_jobs)),
         (Method::GET, "/v1/jobs/{id}", on(MethodFilter::GET, get_job)),
-        (Method::DELETE, "/v1/jobs/{id}", on(MethodFilter::DELETE, cancel_job)),
-        (Method::GET, "/v1/jobs/{id}/loads", on(MethodFilter::GET, get_loads)),
-        (Method::GET, "/v1/jobs/{id}/bodies", on(MethodFilter::GET, get_bodies)),
-        (Method::GET, "/v1/jobs/{id}/probes", on(MethodFilter::GET, get_probes)),
-        (Method::GET, "/v1/jobs/{id}/loads.svg", on(MethodFilter::GET, get_loads_svg)),
+        (
+            Method::DELETE,
+            "/v1/jobs/{id}",
+            on(MethodFilter::DELETE, cancel_job),
+        ),
+        (
+            Method::GET,
+            "/v1/jobs/{id}/loads",
+            on(MethodFilter::GET, get_loads),
+        ),
+        (
+            Method::GET,
+            "/v1/jobs/{id}/bodies",
+            on(MethodFilter::GET, get_bodies),
+        ),
+        (
+            Method::GET,
+            "/v1/jobs/{id}/probes",
+            on(MethodFilter::GET, get_probes),
+        ),
+        (
+            Method::GET,
+            "/v1/jobs/{id}/loads.svg",
+            on(MethodFilter::GET, get_loads_svg),
+        ),
         (Method::GET, "/v1/health", on(MethodFilter::GET, health)),
-        (Method::GET, "/v1/openapi.json", on(MethodFilter::GET, openapi)),
+        (
+            Method::GET,
+            "/v1/openapi.json",
+            on(MethodFilter::GET, openapi),
+        ),
     ]
 }
 
@@ -68,7 +92,10 @@ pub fn job_json(row: &JobRow) -> Value {
         _ if row.end_time > 0.0 => (row.simulated_time / row.end_time).clamp(0.0, 1.0),
         _ => 0.0,
     };
-    let summary = row.summary.as_deref().and_then(|s| serde_json::from_str::<Value>(s).ok());
+    let summary = row
+        .summary
+        .as_deref()
+        .and_then(|s| serde_json::from_str::<Value>(s).ok());
     let base = format!("/v1/jobs/{}", row.id);
     json!({
         "id": row.id.to_string(),
@@ -102,15 +129,25 @@ fn parse_id(id: &str) -> Result<Uuid, ApiError> {
 
 async fn find_job(state: &AppState, id: &str) -> Result<JobRow, ApiError> {
     let uuid = parse_id(id)?;
-    state.jobs.store.get(uuid).await?.ok_or_else(|| ApiError::JobNotFound(id.to_string()))
+    state
+        .jobs
+        .store
+        .get(uuid)
+        .await?
+        .ok_or_else(|| ApiError::JobNotFound(id.to_string()))
 }
 
 #[tracing::instrument(name = "submit job", skip_all)]
-async fn submit_job(State(state): State<AppState>, body: Result<Bytes, BytesRejection>) -> Result<Response, ApiError> {
+async fn submit_job(
+    State(state): State<AppState>,
+    body: Result<Bytes, BytesRejection>,
+) -> Result<Response, ApiError> {
     let config = &state.jobs.config;
     let body = body.map_err(|rejection| {
         if rejection.status() == StatusCode::PAYLOAD_TOO_LARGE {
-            ApiError::PayloadTooLarge { limit: config.max_body_bytes }
+            ApiError::PayloadTooLarge {
+                limit: config.max_body_bytes,
+            }
         } else {
             ApiError::BadRequest(rejection.body_text())
         }
@@ -120,14 +157,25 @@ async fn submit_job(State(state): State<AppState>, body: Result<Bytes, BytesReje
     let case_text: String = if body.iter().all(u8::is_ascii_whitespace) {
         match super::DEFAULT_CASE {
             Some(text) => text.to_string(),
-            None => return Err(ApiError::MalformedJson("the body is empty (no default case is built in)".into())),
+            None => {
+                return Err(ApiError::MalformedJson(
+                    "the body is empty (no default case is built in)".into(),
+                ))
+            }
         }
     } else {
         String::from_utf8(body.to_vec()).map_err(|e| ApiError::MalformedJson(e.to_string()))?
     };
-    let value: Value = serde_json::from_str(&case_text).map_err(|e| ApiError::MalformedJson(e.to_string()))?;
+    let value: Value =
+        serde_json::from_str(&case_text).map_err(|e| ApiError::MalformedJson(e.to_string()))?;
     let case = parse_case_value(value).map_err(ApiError::InvalidCase)?;
-    validate(&case, &Limits { max_particles: config.max_particles }).map_err(ApiError::InvalidCase)?;
+    validate(
+        &case,
+        &Limits {
+            max_particles: config.max_particles,
+        },
+    )
+    .map_err(ApiError::InvalidCase)?;
     if state.jobs.is_stopping() {
         return Err(ApiError::ShuttingDown);
     }
@@ -136,17 +184,35 @@ async fn submit_job(State(state): State<AppState>, body: Result<Bytes, BytesReje
     let dir = config.job_dir(&id);
     tokio::fs::create_dir_all(&dir).await?;
     tokio::fs::write(dir.join("case.json"), &case_text).await?;
-    let admission = state.jobs.store.submit(id, &case.name, &case_text, case.time.end, config.queue_capacity).await;
+    let admission = state
+        .jobs
+        .store
+        .submit(
+            id,
+            &case.name,
+            &case_text,
+            case.time.end,
+            config.queue_capacity,
+        )
+        .await;
     match admission {
         Ok(Admission::Accepted(row)) => {
             state.jobs.job_queued();
             tracing::info!(%id, name = %case.name, "job queued");
             let location = format!("/v1/jobs/{id}");
-            Ok((StatusCode::CREATED, [(header::LOCATION, location)], Json(job_json(&row))).into_response())
+            Ok((
+                StatusCode::CREATED,
+                [(header::LOCATION, location)],
+                Json(job_json(&row)),
+            )
+                .into_response())
         }
         Ok(Admission::QueueFull) => {
             let _ = tokio::fs::remove_dir_all(&dir).await;
-            Err(ApiError::QueueFull { capacity: config.queue_capacity, retry_after_s: RETRY_AFTER_S })
+            Err(ApiError::QueueFull {
+                capacity: config.queue_capacity,
+                retry_after_s: RETRY_AFTER_S,
+            })
         }
         Err(e) => {
             let _ = tokio::fs::remove_dir_all(&dir).await;
@@ -181,23 +247,36 @@ async fn list_jobs(
     let limit = query.limit.unwrap_or(50);
     let offset = query.offset.unwrap_or(0);
     if !(1..=MAX_PAGE).contains(&limit) || offset < 0 {
-        return Err(ApiError::BadRequest(format!("limit must be 1..={MAX_PAGE} and offset >= 0")));
+        return Err(ApiError::BadRequest(format!(
+            "limit must be 1..={MAX_PAGE} and offset >= 0"
+        )));
     }
     let (rows, total) = state.jobs.store.list(status, limit, offset).await?;
     let jobs: Vec<Value> = rows.iter().map(job_json).collect();
-    Ok(Json(json!({ "jobs": jobs, "total": total, "limit": limit, "offset": offset })))
+    Ok(Json(
+        json!({ "jobs": jobs, "total": total, "limit": limit, "offset": offset }),
+    ))
 }
 
 #[tracing::instrument(name = "get job", skip(state))]
-async fn get_job(State(state): State<AppState>, Path(id): Path<String>) -> Result<Json<Value>, ApiError> {
+async fn get_job(
+    State(state): State<AppState>,
+    Path(id): Path<String>,
+) -> Result<Json<Value>, ApiError> {
     Ok(Json(job_json(&find_job(&state, &id).await?)))
 }
 
 #[tracing::instrument(name = "cancel job", skip(state))]
-async fn cancel_job(State(state): State<AppState>, Path(id): Path<String>) -> Result<Response, ApiError> {
+async fn cancel_job(
+    State(state): State<AppState>,
+    Path(id): Path<String>,
+) -> Result<Response, ApiError> {
     let row = find_job(&state, &id).await?;
     if row.status.is_finished() {
-        return Err(ApiError::AlreadyFinished { id, status: row.status.as_str().to_string() });
+        return Err(ApiError::AlreadyFinished {
+            id,
+            status: row.status.as_str().to_string(),
+        });
     }
     if state.jobs.store.cancel_if_queued(row.id).await? {
         let row = find_job(&state, &id).await?;
@@ -221,16 +300,27 @@ fn wants_csv(headers: &HeaderMap) -> bool {
 }
 
 /// The complete lines of a job's CSV file, or the header alone when nothing exists yet.
-async fn read_series(state: &AppState, row: &JobRow, file: SeriesFile) -> Result<Vec<u8>, ApiError> {
+async fn read_series(
+    state: &AppState,
+    row: &JobRow,
+    file: SeriesFile,
+) -> Result<Vec<u8>, ApiError> {
     let path = state.jobs.config.job_dir(&row.id).join(file.file);
     match tokio::fs::read(&path).await {
         Ok(bytes) => Ok(series::complete_lines(&bytes).to_vec()),
-        Err(e) if e.kind() == std::io::ErrorKind::NotFound => Ok(format!("{}\n", file.header).into_bytes()),
+        Err(e) if e.kind() == std::io::ErrorKind::NotFound => {
+            Ok(format!("{}\n", file.header).into_bytes())
+        }
         Err(e) => Err(e.into()),
     }
 }
 
-async fn serve_series(state: AppState, id: String, headers: HeaderMap, file: SeriesFile) -> Result<Response, ApiError> {
+async fn serve_series(
+    state: AppState,
+    id: String,
+    headers: HeaderMap,
+    file: SeriesFile,
+) -> Result<Response, ApiError> {
     let row = find_job(&state, &id).await?;
     let text = read_series(&state, &row, file).await?;
     if wants_csv(&headers) {
@@ -245,29 +335,46 @@ async fn serve_series(state: AppState, id: String, headers: HeaderMap, file: Ser
 }
 
 #[tracing::instrument(name = "get loads", skip(state, headers))]
-async fn get_loads(State(state): State<AppState>, Path(id): Path<String>, headers: HeaderMap) -> Result<Response, ApiError> {
+async fn get_loads(
+    State(state): State<AppState>,
+    Path(id): Path<String>,
+    headers: HeaderMap,
+) -> Result<Response, ApiError> {
     serve_series(state, id, headers, series::LOADS).await
 }
 
 #[tracing::instrument(name = "get bodies", skip(state, headers))]
-async fn get_bodies(State(state): State<AppState>, Path(id): Path<String>, headers: HeaderMap) -> Result<Response, ApiError> {
+async fn get_bodies(
+    State(state): State<AppState>,
+    Path(id): Path<String>,
+    headers: HeaderMap,
+) -> Result<Response, ApiError> {
     serve_series(state, id, headers, series::BODIES).await
 }
 
 #[tracing::instrument(name = "get probes", skip(state, headers))]
-async fn get_probes(State(state): State<AppState>, Path(id): Path<String>, headers: HeaderMap) -> Result<Response, ApiError> {
+async fn get_probes(
+    State(state): State<AppState>,
+    Path(id): Path<String>,
+    headers: HeaderMap,
+) -> Result<Response, ApiError> {
     serve_series(state, id, headers, series::PROBES).await
 }
 
 #[tracing::instrument(name = "get loads plot", skip(state))]
-async fn get_loads_svg(State(state): State<AppState>, Path(id): Path<String>) -> Result<Response, ApiError> {
+async fn get_loads_svg(
+    State(state): State<AppState>,
+    Path(id): Path<String>,
+) -> Result<Response, ApiError> {
     let row = find_job(&state, &id).await?;
     let text = read_series(&state, &row, series::LOADS).await?;
     let title = format!("{} ({}): loads", row.name, row.status.as_str());
-    let svg = tokio::task::spawn_blocking(move || super::plot::loads_svg(&title, &series::load_rows(&text)))
-        .await
-        .map_err(ApiError::internal)?
-        .map_err(ApiError::internal)?;
+    let svg = tokio::task::spawn_blocking(move || {
+        super::plot::loads_svg(&title, &series::load_rows(&text))
+    })
+    .await
+    .map_err(ApiError::internal)?
+    .map_err(ApiError::internal)?;
     Ok(([(header::CONTENT_TYPE, "image/svg+xml")], svg).into_response())
 }
 

@@ -13,9 +13,21 @@ pub struct SeriesFile {
     pub header: &'static str,
 }
 
-pub const LOADS: SeriesFile = SeriesFile { file: "loads.csv", group: "bodies", header: crate::output::LOADS_HEADER };
-pub const BODIES: SeriesFile = SeriesFile { file: "bodies.csv", group: "bodies", header: crate::output::BODIES_HEADER };
-pub const PROBES: SeriesFile = SeriesFile { file: "probes.csv", group: "probes", header: crate::output::PROBES_HEADER };
+pub const LOADS: SeriesFile = SeriesFile {
+    file: "loads.csv",
+    group: "bodies",
+    header: crate::output::LOADS_HEADER,
+};
+pub const BODIES: SeriesFile = SeriesFile {
+    file: "bodies.csv",
+    group: "bodies",
+    header: crate::output::BODIES_HEADER,
+};
+pub const PROBES: SeriesFile = SeriesFile {
+    file: "probes.csv",
+    group: "probes",
+    header: crate::output::PROBES_HEADER,
+};
 
 /// The complete lines of `text` (up to and including the last newline).
 pub fn complete_lines(text: &[u8]) -> &[u8] {
@@ -27,7 +39,9 @@ pub fn complete_lines(text: &[u8]) -> &[u8] {
 
 /// Parse CSV text (header first) into columns per series name, in order of appearance.
 pub fn csv_to_columns(text: &[u8]) -> Result<Map<String, Value>, csv::Error> {
-    let mut reader = csv::ReaderBuilder::new().has_headers(true).from_reader(complete_lines(text));
+    let mut reader = csv::ReaderBuilder::new()
+        .has_headers(true)
+        .from_reader(complete_lines(text));
     let headers: Vec<String> = reader.headers()?.iter().map(str::to_string).collect();
     let mut out = Map::new();
     if headers.len() < 2 {
@@ -45,13 +59,18 @@ pub fn csv_to_columns(text: &[u8]) -> Result<Map<String, Value>, csv::Error> {
             }
             Value::Object(m)
         });
-        let Value::Object(series) = series else { continue };
+        let Value::Object(series) = series else {
+            continue;
+        };
         for (k, h) in headers.iter().enumerate() {
             if k == 1 {
                 continue;
             }
             let v = record.get(k).and_then(|s| s.trim().parse::<f64>().ok());
-            let v = v.and_then(serde_json::Number::from_f64).map(Value::Number).unwrap_or(Value::Null);
+            let v = v
+                .and_then(serde_json::Number::from_f64)
+                .map(Value::Number)
+                .unwrap_or(Value::Null);
             if let Some(Value::Array(column)) = series.get_mut(h) {
                 column.push(v);
             }
@@ -62,7 +81,9 @@ pub fn csv_to_columns(text: &[u8]) -> Result<Map<String, Value>, csv::Error> {
 
 /// `(name, time, [fx, fy, mz])` rows of loads.csv text, for the plot.
 pub fn load_rows(text: &[u8]) -> Vec<(String, f64, [f64; 3])> {
-    let mut reader = csv::ReaderBuilder::new().has_headers(true).from_reader(complete_lines(text));
+    let mut reader = csv::ReaderBuilder::new()
+        .has_headers(true)
+        .from_reader(complete_lines(text));
     let mut rows = Vec::new();
     for record in reader.records().flatten() {
         let num = |k: usize| record.get(k).and_then(|s| s.trim().parse::<f64>().ok());

@@ -18,11 +18,17 @@ use tokio::sync::watch;
 #[derive(Debug, thiserror::Error)]
 pub enum ServeError {
     #[error("cannot create the data directory {path}: {source}")]
-    DataDir { path: String, source: std::io::Error },
+    DataDir {
+        path: String,
+        source: std::io::Error,
+    },
     #[error("cannot open the job database: {0}")]
     Database(#[from] sqlx::Error),
     #[error("cannot listen on {addr}: {source}")]
-    Bind { addr: String, source: std::io::Error },
+    Bind {
+        addr: String,
+        source: std::io::Error,
+    },
     #[error("api/openapi.yaml is not valid YAML: {0}")]
     OpenApi(String),
     #[error("the server stopped with an error: {0}")]
@@ -51,23 +57,40 @@ pub struct App {
 impl App {
     pub async fn build(config: Config) -> Result<App, ServeError> {
         let jobs_dir = config.data_dir.join("jobs");
-        std::fs::create_dir_all(&jobs_dir)
-            .map_err(|source| ServeError::DataDir { path: jobs_dir.display().to_string(), source })?;
-        let openapi: serde_json::Value =
-            serde_norway::from_str(super::OPENAPI_YAML).map_err(|e| ServeError::OpenApi(e.to_string()))?;
+        std::fs::create_dir_all(&jobs_dir).map_err(|source| ServeError::DataDir {
+            path: jobs_dir.display().to_string(),
+            source,
+        })?;
+        let openapi: serde_json::Value = serde_norway::from_str(super::OPENAPI_YAML)
+            .map_err(|e| ServeError::OpenApi(e.to_string()))?;
         let store = JobStore::open(&config.database_url()).await?;
         let interrupted = store.recover_interrupted().await?;
         if interrupted > 0 {
-            tracing::warn!(interrupted, "jobs left running by a previous process are now failed (interrupted)");
+            tracing::warn!(
+                interrupted,
+                "jobs left running by a previous process are now failed (interrupted)"
+            );
         }
         let listener = TcpListener::bind(config.addr)
             .await
-            .map_err(|source| ServeError::Bind { addr: config.addr.to_string(), source })?;
+            .map_err(|source| ServeError::Bind {
+                addr: config.addr.to_string(),
+                source,
+            })?;
         let port = listener.local_addr().map_err(ServeError::Serve)?.port();
         let jobs = Arc::new(Jobs::new(store, config));
-        let state = AppState { jobs: jobs.clone(), openapi: Arc::new(openapi) };
+        let state = AppState {
+            jobs: jobs.clone(),
+            openapi: Arc::new(openapi),
+        };
         let (shutdown, _) = watch::channel(false);
-        Ok(App { port, listener, jobs, state, shutdown })
+        Ok(App {
+            port,
+            listener,
+            jobs,
+            state,
+            shutdown,
+        })
     }
 
     pub fn port(&self) -> u16 {
@@ -80,10 +103,17 @@ impl App {
 
     /// Serve and run the workers until a signal or the shutdown handle, then shut down.
     pub async fn run_until_stopped(self) -> Result<(), ServeError> {
-        let App { listener, jobs, state, shutdown, .. } = self;
+        let App {
+            listener,
+            jobs,
+            state,
+            shutdown,
+            ..
+        } = self;
         let config = jobs.config.clone();
-        let workers: Vec<_> =
-            (0..config.workers.max(1)).map(|_| tokio::spawn(run_worker_until_stopped(jobs.clone()))).collect();
+        let workers: Vec<_> = (0..config.workers.max(1))
+            .map(|_| tokio::spawn(run_worker_until_stopped(jobs.clone())))
+            .collect();
         jobs.job_queued(); // jobs re-queued from a previous process
 
         let mut stop = shutdown.subscribe();
@@ -93,8 +123,11 @@ impl App {
                 _ = stop.wait_for(|v| *v) => tracing::info!("shutdown requested"),
             }
         };
-        let app = router(state, config.max_body_bytes).layer(tower_http::trace::TraceLayer::new_for_http());
-        let served = axum::serve(listener, app).with_graceful_shutdown(signal).await;
+        let app = router(state, config.max_body_bytes)
+            .layer(tower_http::trace::TraceLayer::new_for_http());
+        let served = axum::serve(listener, app)
+            .with_graceful_shutdown(signal)
+            .await;
 
         jobs.stop_claiming();
         let deadline = Instant::now() + config.shutdown_grace();
@@ -142,7 +175,10 @@ async fn os_signal() {
 pub async fn serve(config: Config) -> Result<(), ServeError> {
     let filter = tracing_subscriber::EnvFilter::try_from_default_env()
         .unwrap_or_else(|_| tracing_subscriber::EnvFilter::new("info"));
-    let _ = tracing_subscriber::fmt().with_env_filter(filter).with_writer(std::io::stderr).try_init();
+    let _ = tracing_subscriber::fmt()
+        .with_env_filter(filter)
+        .with_writer(std::io::stderr)
+        .try_init();
     let app = App::build(config.clone()).await?;
     tracing::info!(
         addr = %format!("{}:{}", config.addr.ip(), app.port()),

@@ -2,7 +2,9 @@
 //! [`crate::service`]. Timestamps are RFC 3339 strings in UTC.
 
 use serde::{Deserialize, Serialize};
-use sqlx::sqlite::{SqliteConnectOptions, SqliteJournalMode, SqlitePool, SqlitePoolOptions, SqliteSynchronous};
+use sqlx::sqlite::{
+    SqliteConnectOptions, SqliteJournalMode, SqlitePool, SqlitePoolOptions, SqliteSynchronous,
+};
 use sqlx::Row;
 use std::str::FromStr;
 use std::time::Duration;
@@ -73,7 +75,9 @@ pub struct ClaimedJob {
 }
 
 pub fn now_rfc3339() -> String {
-    OffsetDateTime::now_utc().format(&Rfc3339).unwrap_or_default()
+    OffsetDateTime::now_utc()
+        .format(&Rfc3339)
+        .unwrap_or_default()
 }
 
 const COLUMNS: &str =
@@ -205,7 +209,10 @@ impl JobStore {
         .await?;
         match row {
             None => Ok(None),
-            Some(r) => Ok(Some(ClaimedJob { row: row_to_job(&r)?, case_json: r.try_get("case_json")? })),
+            Some(r) => Ok(Some(ClaimedJob {
+                row: row_to_job(&r)?,
+                case_json: r.try_get("case_json")?,
+            })),
         }
     }
 
@@ -233,10 +240,11 @@ impl JobStore {
         .bind(offset)
         .fetch_all(&self.pool)
         .await?;
-        let total: i64 = sqlx::query_scalar("SELECT COUNT(*) FROM jobs WHERE (?1 IS NULL OR status = ?1)")
-            .bind(filter)
-            .fetch_one(&self.pool)
-            .await?;
+        let total: i64 =
+            sqlx::query_scalar("SELECT COUNT(*) FROM jobs WHERE (?1 IS NULL OR status = ?1)")
+                .bind(filter)
+                .fetch_one(&self.pool)
+                .await?;
         let jobs = rows.iter().map(row_to_job).collect::<Result<Vec<_>, _>>()?;
         Ok((jobs, total))
     }
@@ -263,13 +271,20 @@ impl JobStore {
         Ok(())
     }
 
-    pub async fn set_progress(&self, id: Uuid, step: u64, simulated_time: f64) -> Result<(), sqlx::Error> {
-        sqlx::query("UPDATE jobs SET step = ?, simulated_time = ? WHERE id = ? AND status = 'running'")
-            .bind(step as i64)
-            .bind(simulated_time)
-            .bind(id.to_string())
-            .execute(&self.pool)
-            .await?;
+    pub async fn set_progress(
+        &self,
+        id: Uuid,
+        step: u64,
+        simulated_time: f64,
+    ) -> Result<(), sqlx::Error> {
+        sqlx::query(
+            "UPDATE jobs SET step = ?, simulated_time = ? WHERE id = ? AND status = 'running'",
+        )
+        .bind(step as i64)
+        .bind(simulated_time)
+        .bind(id.to_string())
+        .execute(&self.pool)
+        .await?;
         Ok(())
     }
 
@@ -301,6 +316,9 @@ impl JobStore {
 
     /// Cheap liveness check of the database.
     pub async fn ping(&self) -> Result<(), sqlx::Error> {
-        sqlx::query("SELECT 1").execute(&self.pool).await.map(|_| ())
+        sqlx::query("SELECT 1")
+            .execute(&self.pool)
+            .await
+            .map(|_| ())
     }
 }

@@ -114,7 +114,10 @@ const PROGRESS_EVERY: Duration = Duration::from_millis(250);
 impl Observer for JobObserver {
     fn started(&mut self, particles: usize, estimated_steps: u64) {
         tracing::info!(particles, estimated_steps, "run started");
-        if let Err(e) = self.runtime.block_on(self.store.set_started(self.id, particles)) {
+        if let Err(e) = self
+            .runtime
+            .block_on(self.store.set_started(self.id, particles))
+        {
             tracing::warn!(error = %e, "cannot record the particle count");
         }
     }
@@ -122,7 +125,10 @@ impl Observer for JobObserver {
     fn progress(&mut self, p: &Progress) {
         if self.last_write.elapsed() >= PROGRESS_EVERY {
             self.last_write = Instant::now();
-            if let Err(e) = self.runtime.block_on(self.store.set_progress(self.id, p.step, p.simulated_time)) {
+            if let Err(e) =
+                self.runtime
+                    .block_on(self.store.set_progress(self.id, p.step, p.simulated_time))
+            {
                 tracing::warn!(error = %e, "cannot record progress");
             }
         }
@@ -176,26 +182,59 @@ async fn execute(jobs: &Arc<Jobs>, job: ClaimedJob) -> Result<JobStatus, sqlx::E
             let (status, reason) = match summary.status {
                 RunStatus::Succeeded => (JobStatus::Succeeded, None),
                 RunStatus::Failed => (JobStatus::Failed, summary.reason.clone()),
-                RunStatus::Cancelled if cancel.load(Ordering::SeqCst) => {
-                    (JobStatus::Cancelled, Some("cancelled by request".to_string()))
-                }
+                RunStatus::Cancelled if cancel.load(Ordering::SeqCst) => (
+                    JobStatus::Cancelled,
+                    Some("cancelled by request".to_string()),
+                ),
                 RunStatus::Cancelled => (JobStatus::Failed, Some(INTERRUPTED.to_string())),
             };
             let text = serde_json::to_string(&summary).ok();
             (status, reason, text, summary.steps, summary.simulated_time)
         }
-        Ok(Err(RunError::Case(e))) => (JobStatus::Failed, Some(format!("invalid case: {e}")), None, 0, 0.0),
+        Ok(Err(RunError::Case(e))) => (
+            JobStatus::Failed,
+            Some(format!("invalid case: {e}")),
+            None,
+            0,
+            0.0,
+        ),
         Ok(Err(RunError::Io(e))) => {
             tracing::error!(error = %e, "cannot write the run directory");
-            (JobStatus::Failed, Some("cannot write the run directory".to_string()), None, 0, 0.0)
+            (
+                JobStatus::Failed,
+                Some("cannot write the run directory".to_string()),
+                None,
+                0,
+                0.0,
+            )
         }
         Err(join) => {
             tracing::error!(error = %join, "the run panicked");
-            (JobStatus::Failed, Some("internal error: the run panicked".to_string()), None, 0, 0.0)
+            (
+                JobStatus::Failed,
+                Some("internal error: the run panicked".to_string()),
+                None,
+                0,
+                0.0,
+            )
         }
     };
-    tracing::info!(status = status.as_str(), reason = reason.as_deref().unwrap_or(""), steps, "run finished");
-    jobs.store.finish(id, status, reason.as_deref(), summary.as_deref(), steps, time).await?;
+    tracing::info!(
+        status = status.as_str(),
+        reason = reason.as_deref().unwrap_or(""),
+        steps,
+        "run finished"
+    );
+    jobs.store
+        .finish(
+            id,
+            status,
+            reason.as_deref(),
+            summary.as_deref(),
+            steps,
+            time,
+        )
+        .await?;
     Ok(status)
 }
 

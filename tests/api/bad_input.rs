@@ -25,7 +25,10 @@ async fn bad_submissions_are_refused_with_the_field_path() {
     let (status, body) = refused(&app, serde_json::to_vec(&case).unwrap()).await;
     assert_eq!(status, 422, "{body}");
     assert_eq!(body["error"]["path"], "scheme.laplacian", "{body}");
-    assert!(body["error"]["message"].as_str().unwrap().contains("magic"), "{body}");
+    assert!(
+        body["error"]["message"].as_str().unwrap().contains("magic"),
+        "{body}"
+    );
 
     // Over the 64 KiB limit: valid JSON padded with a long name.
     let mut case = tiny_case(0.005);
@@ -37,7 +40,9 @@ async fn bad_submissions_are_refused_with_the_field_path() {
     let (status, body) = app.get_json("/v1/jobs/not-a-job").await;
     assert_eq!(status, 404);
     assert_conforms("GET", "/v1/jobs/{id}", 404, &body);
-    let (status, _) = app.get_json(&format!("/v1/jobs/{}/loads", uuid::Uuid::new_v4())).await;
+    let (status, _) = app
+        .get_json(&format!("/v1/jobs/{}/loads", uuid::Uuid::new_v4()))
+        .await;
     assert_eq!(status, 404);
 
     // Nothing was queued, and the server still works.
@@ -74,8 +79,20 @@ async fn invalid_cases_are_refused_with_the_field_path() {
     }]);
     let (status, body) = refused(&app, serde_json::to_vec(&case).unwrap()).await;
     assert_eq!(status, 422, "{body}");
-    assert!(body["error"]["path"].as_str().unwrap().starts_with("bodies[0].polygon"), "{body}");
-    assert!(body["error"]["message"].as_str().unwrap().contains("intersect"), "{body}");
+    assert!(
+        body["error"]["path"]
+            .as_str()
+            .unwrap()
+            .starts_with("bodies[0].polygon"),
+        "{body}"
+    );
+    assert!(
+        body["error"]["message"]
+            .as_str()
+            .unwrap()
+            .contains("intersect"),
+        "{body}"
+    );
 
     let (_, list) = app.get_json("/v1/jobs").await;
     assert_eq!(list["total"], 0);

@@ -15,7 +15,12 @@ async fn a_burst_of_submissions_loses_and_duplicates_nothing() {
     let requests = (0..200).map(|_| {
         let (client, url, case) = (app.client.clone(), app.url("/v1/jobs"), case.clone());
         tokio::spawn(async move {
-            let r = client.post(url).json(&case).send().await.expect("request sent");
+            let r = client
+                .post(url)
+                .json(&case)
+                .send()
+                .await
+                .expect("request sent");
             let status = r.status().as_u16();
             let body: serde_json::Value = r.json().await.unwrap();
             (status, body)
@@ -35,7 +40,11 @@ async fn a_burst_of_submissions_loses_and_duplicates_nothing() {
         }
     }
     assert_eq!(accepted.len() + refused, 200);
-    assert!(accepted.len() >= 40, "at least the queue capacity is accepted ({})", accepted.len());
+    assert!(
+        accepted.len() >= 40,
+        "at least the queue capacity is accepted ({})",
+        accepted.len()
+    );
     let unique: BTreeSet<String> = accepted.iter().cloned().collect();
     assert_eq!(unique.len(), accepted.len(), "duplicate ids");
 
@@ -45,11 +54,17 @@ async fn a_burst_of_submissions_loses_and_duplicates_nothing() {
     }
     let (_, list) = app.get_json("/v1/jobs?limit=1000").await;
     assert_eq!(list["total"].as_u64().unwrap() as usize, accepted.len());
-    let listed: BTreeSet<String> =
-        list["jobs"].as_array().unwrap().iter().map(|j| j["id"].as_str().unwrap().to_string()).collect();
+    let listed: BTreeSet<String> = list["jobs"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|j| j["id"].as_str().unwrap().to_string())
+        .collect();
     assert_eq!(listed, unique, "the job list is exactly the accepted jobs");
     // Refused submissions left no run directory behind.
-    let dirs = std::fs::read_dir(app.data_dir.join("jobs")).unwrap().count();
+    let dirs = std::fs::read_dir(app.data_dir.join("jobs"))
+        .unwrap()
+        .count();
     assert_eq!(dirs, accepted.len());
     app.stop().await;
 }

@@ -11,7 +11,12 @@ async fn cancelling_a_running_job_stops_it_and_keeps_its_files() {
     let running = app.wait_running(&id).await;
     assert!(running["particles"].as_u64().unwrap() > 0);
 
-    let r = app.client.delete(app.url(&format!("/v1/jobs/{id}"))).send().await.unwrap();
+    let r = app
+        .client
+        .delete(app.url(&format!("/v1/jobs/{id}")))
+        .send()
+        .await
+        .unwrap();
     assert_eq!(r.status().as_u16(), 202);
     let body: Value = r.json().await.unwrap();
     assert_conforms("DELETE", "/v1/jobs/{id}", 202, &body);
@@ -20,11 +25,15 @@ async fn cancelling_a_running_job_stops_it_and_keeps_its_files() {
     assert_eq!(job["status"], "cancelled", "{job:#}");
     assert_eq!(job["summary"]["status"], "cancelled");
     let steps = job["summary"]["steps"].as_u64().unwrap();
-    assert!(steps > 0 && job["progress"]["fraction"].as_f64().unwrap() < 0.5, "{job:#}");
+    assert!(
+        steps > 0 && job["progress"]["fraction"].as_f64().unwrap() < 0.5,
+        "{job:#}"
+    );
     // What it wrote is kept and served.
     let (status, _, csv) = app.get_csv(&format!("/v1/jobs/{id}/loads")).await;
     assert_eq!(status, 200);
-    let on_disk = std::fs::read_to_string(app.data_dir.join("jobs").join(&id).join("loads.csv")).unwrap();
+    let on_disk =
+        std::fs::read_to_string(app.data_dir.join("jobs").join(&id).join("loads.csv")).unwrap();
     assert_eq!(csv, on_disk);
     // The worker is free again.
     let next = app.submit(&tiny_case(0.002)).await;
@@ -45,7 +54,11 @@ async fn a_full_queue_answers_503_with_retry_after() {
 
     let r = app.post_case(&tiny_case(0.002)).await;
     assert_eq!(r.status().as_u16(), 503);
-    let retry_after: u64 = r.headers()["retry-after"].to_str().unwrap().parse().unwrap();
+    let retry_after: u64 = r.headers()["retry-after"]
+        .to_str()
+        .unwrap()
+        .parse()
+        .unwrap();
     assert!(retry_after > 0);
     let body: Value = r.json().await.unwrap();
     assert_conforms("POST", "/v1/jobs", 503, &body);
@@ -57,13 +70,23 @@ async fn a_full_queue_answers_503_with_retry_after() {
     assert_eq!(loads["status"], "running");
 
     // A queued job is cancelled at once, which frees its place.
-    let r = app.client.delete(app.url(&format!("/v1/jobs/{queued}"))).send().await.unwrap();
+    let r = app
+        .client
+        .delete(app.url(&format!("/v1/jobs/{queued}")))
+        .send()
+        .await
+        .unwrap();
     assert_eq!(r.status().as_u16(), 200);
     let body: Value = r.json().await.unwrap();
     assert_eq!(body["status"], "cancelled");
     let again = app.submit(&tiny_case(0.002)).await;
 
-    let r = app.client.delete(app.url(&format!("/v1/jobs/{running}"))).send().await.unwrap();
+    let r = app
+        .client
+        .delete(app.url(&format!("/v1/jobs/{running}")))
+        .send()
+        .await
+        .unwrap();
     assert_eq!(r.status().as_u16(), 202);
     assert_eq!(app.wait_finished(&running).await["status"], "cancelled");
     assert_eq!(app.wait_finished(&again).await["status"], "succeeded");

@@ -7,12 +7,19 @@ use crate::schema::{assert_conforms, check, OPENAPI};
 use serde_json::Value;
 use std::collections::BTreeSet;
 
-const METHODS: &[&str] = &["get", "post", "put", "delete", "patch", "head", "options", "trace"];
+const METHODS: &[&str] = &[
+    "get", "post", "put", "delete", "patch", "head", "options", "trace",
+];
 
 fn documented_routes() -> BTreeSet<(String, String)> {
     let mut routes = BTreeSet::new();
     for (path, item) in OPENAPI["paths"].as_object().unwrap() {
-        for method in item.as_object().unwrap().keys().filter(|k| METHODS.contains(&k.as_str())) {
+        for method in item
+            .as_object()
+            .unwrap()
+            .keys()
+            .filter(|k| METHODS.contains(&k.as_str()))
+        {
             routes.insert((method.to_uppercase(), path.clone()));
         }
     }
@@ -62,17 +69,27 @@ async fn the_server_answers_every_documented_route_and_no_other() {
     for (method, path) in documented_routes() {
         let url = app.url(&path.replace("{id}", &id));
         let request = app.client.request(method.parse().unwrap(), url);
-        let request = if method == "POST" { request.json(&tiny_case(0.002)) } else { request };
+        let request = if method == "POST" {
+            request.json(&tiny_case(0.002))
+        } else {
+            request
+        };
         let response = request.send().await.unwrap();
         let status = response.status().as_u16();
-        let content_type =
-            response.headers().get("content-type").map(|v| v.to_str().unwrap().to_string()).unwrap_or_default();
+        let content_type = response
+            .headers()
+            .get("content-type")
+            .map(|v| v.to_str().unwrap().to_string())
+            .unwrap_or_default();
         let body = response.bytes().await.unwrap();
         crate::schema::response_spec(&method, &path, status); // the status is documented
         if content_type.starts_with("application/json") {
             let json: Value = serde_json::from_slice(&body).unwrap();
             let code = json["error"]["code"].as_str().unwrap_or("");
-            assert!(code != "route_not_found" && code != "method_not_allowed", "{method} {path}: {json}");
+            assert!(
+                code != "route_not_found" && code != "method_not_allowed",
+                "{method} {path}: {json}"
+            );
             if path != "/v1/openapi.json" {
                 assert_conforms(&method, &path, status, &json);
             } else {
@@ -87,13 +104,26 @@ async fn the_server_answers_every_documented_route_and_no_other() {
         ("PUT", "/v1/jobs".to_string(), 405, "method_not_allowed"),
         ("PATCH", format!("/v1/jobs/{id}"), 405, "method_not_allowed"),
         ("GET", "/v1/nothing".to_string(), 404, "route_not_found"),
-        ("GET", format!("/v1/jobs/{id}/snapshots"), 404, "route_not_found"),
+        (
+            "GET",
+            format!("/v1/jobs/{id}/snapshots"),
+            404,
+            "route_not_found",
+        ),
     ] {
-        let r = app.client.request(method.parse().unwrap(), app.url(&path)).send().await.unwrap();
+        let r = app
+            .client
+            .request(method.parse().unwrap(), app.url(&path))
+            .send()
+            .await
+            .unwrap();
         assert_eq!(r.status().as_u16(), status, "{method} {path}");
         let json: Value = r.json().await.unwrap();
         assert_eq!(json["error"]["code"], code);
-        assert!(check(&OPENAPI, &error_schema, &json, "$").is_empty(), "{json}");
+        assert!(
+            check(&OPENAPI, &error_schema, &json, "$").is_empty(),
+            "{json}"
+        );
     }
     app.stop().await;
 }

@@ -8,7 +8,10 @@ use std::time::{Duration, Instant};
 
 static TRACING: LazyLock<()> = LazyLock::new(|| {
     if std::env::var("TEST_LOG").is_ok() {
-        let _ = tracing_subscriber::fmt().with_env_filter("info").with_test_writer().try_init();
+        let _ = tracing_subscriber::fmt()
+            .with_env_filter("info")
+            .with_test_writer()
+            .try_init();
     }
 });
 
@@ -35,7 +38,8 @@ impl std::ops::Deref for TestApp {
 
 /// A fresh data directory under the cargo target's temporary directory.
 pub fn fresh_data_dir(tag: &str) -> PathBuf {
-    let dir = PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join(format!("api-{tag}-{}", uuid::Uuid::new_v4()));
+    let dir = PathBuf::from(env!("CARGO_TARGET_TMPDIR"))
+        .join(format!("api-{tag}-{}", uuid::Uuid::new_v4()));
     std::fs::create_dir_all(&dir).unwrap();
     dir
 }
@@ -52,7 +56,15 @@ pub async fn spawn_app_on(data_dir: PathBuf, tweak: impl FnOnce(&mut Config)) ->
     let address = format!("http://127.0.0.1:{}", app.port());
     let shutdown = app.shutdown_handle();
     let task = tokio::spawn(app.run_until_stopped());
-    TestApp { api: Api { address, client: reqwest::Client::new() }, data_dir, shutdown, task }
+    TestApp {
+        api: Api {
+            address,
+            client: reqwest::Client::new(),
+        },
+        data_dir,
+        shutdown,
+        task,
+    }
 }
 
 impl TestApp {
@@ -82,15 +94,30 @@ impl Api {
     }
 
     pub async fn get_json(&self, path: &str) -> (u16, Value) {
-        let r = self.client.get(self.url(path)).send().await.expect("request sent");
+        let r = self
+            .client
+            .get(self.url(path))
+            .send()
+            .await
+            .expect("request sent");
         let status = r.status().as_u16();
         (status, r.json().await.expect("a JSON body"))
     }
 
     pub async fn get_csv(&self, path: &str) -> (u16, String, String) {
-        let r = self.client.get(self.url(path)).header("accept", "text/csv").send().await.expect("request sent");
+        let r = self
+            .client
+            .get(self.url(path))
+            .header("accept", "text/csv")
+            .send()
+            .await
+            .expect("request sent");
         let status = r.status().as_u16();
-        let ct = r.headers().get("content-type").map(|v| v.to_str().unwrap().to_string()).unwrap_or_default();
+        let ct = r
+            .headers()
+            .get("content-type")
+            .map(|v| v.to_str().unwrap().to_string())
+            .unwrap_or_default();
         (status, ct, r.text().await.unwrap())
     }
 
@@ -110,21 +137,32 @@ impl Api {
     }
 
     /// Poll until the job's status satisfies `done` (or panic after `timeout`).
-    pub async fn wait_for(&self, id: &str, timeout: Duration, done: impl Fn(&Value) -> bool) -> Value {
+    pub async fn wait_for(
+        &self,
+        id: &str,
+        timeout: Duration,
+        done: impl Fn(&Value) -> bool,
+    ) -> Value {
         let start = Instant::now();
         loop {
             let job = self.job(id).await;
             if done(&job) {
                 return job;
             }
-            assert!(start.elapsed() < timeout, "job {id} did not get there in {timeout:?}: {job}");
+            assert!(
+                start.elapsed() < timeout,
+                "job {id} did not get there in {timeout:?}: {job}"
+            );
             tokio::time::sleep(Duration::from_millis(20)).await;
         }
     }
 
     pub async fn wait_finished(&self, id: &str) -> Value {
         self.wait_for(id, Duration::from_secs(60), |j| {
-            matches!(j["status"].as_str(), Some("succeeded" | "failed" | "cancelled"))
+            matches!(
+                j["status"].as_str(),
+                Some("succeeded" | "failed" | "cancelled")
+            )
         })
         .await
     }

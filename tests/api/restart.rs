@@ -26,7 +26,11 @@ fn child_server() {
 }
 
 fn free_port() -> u16 {
-    std::net::TcpListener::bind("127.0.0.1:0").unwrap().local_addr().unwrap().port()
+    std::net::TcpListener::bind("127.0.0.1:0")
+        .unwrap()
+        .local_addr()
+        .unwrap()
+        .port()
 }
 
 /// `mpsfsi serve` when the binary has it, else this test binary's [`child_server`];
@@ -34,16 +38,27 @@ fn free_port() -> u16 {
 async fn spawn_server_process(data: &Path, port: u16, api: &Api) -> Child {
     let addr = format!("127.0.0.1:{port}");
     let mut real = Command::new(env!("CARGO_BIN_EXE_mpsfsi"));
-    real.args(["serve", "--addr", &addr, "--data"]).arg(data).args(["--workers", "1"]);
+    real.args(["serve", "--addr", &addr, "--data"])
+        .arg(data)
+        .args(["--workers", "1"]);
     let mut fallback = Command::new(std::env::current_exe().unwrap());
     fallback
-        .args(["restart::child_server", "--exact", "--ignored", "--nocapture"])
+        .args([
+            "restart::child_server",
+            "--exact",
+            "--ignored",
+            "--nocapture",
+        ])
         .env("MPSFSI_TEST_CHILD", "1")
         .env("MPSFSI_ADDR", &addr)
         .env("MPSFSI_DATA", data)
         .env("MPSFSI_WORKERS", "1");
     for mut cmd in [real, fallback] {
-        let mut child = cmd.stdout(Stdio::null()).stderr(Stdio::null()).spawn().expect("server process starts");
+        let mut child = cmd
+            .stdout(Stdio::null())
+            .stderr(Stdio::null())
+            .spawn()
+            .expect("server process starts");
         let start = Instant::now();
         loop {
             if let Ok(r) = api.client.get(api.url("/v1/health")).send().await {
@@ -54,7 +69,10 @@ async fn spawn_server_process(data: &Path, port: u16, api: &Api) -> Child {
             if child.try_wait().unwrap().is_some() {
                 break; // this binary has no working `serve`: try the next command
             }
-            assert!(start.elapsed() < Duration::from_secs(30), "server did not come up");
+            assert!(
+                start.elapsed() < Duration::from_secs(30),
+                "server did not come up"
+            );
             tokio::time::sleep(Duration::from_millis(50)).await;
         }
     }
@@ -65,7 +83,10 @@ async fn spawn_server_process(data: &Path, port: u16, api: &Api) -> Child {
 async fn a_killed_server_restarts_with_finished_jobs_intact() {
     let data = fresh_data_dir("killed");
     let port = free_port();
-    let api = Api { address: format!("http://127.0.0.1:{port}"), client: reqwest::Client::new() };
+    let api = Api {
+        address: format!("http://127.0.0.1:{port}"),
+        client: reqwest::Client::new(),
+    };
     let mut child = spawn_server_process(&data, port, &api).await;
 
     let finished = api.submit(&tiny_case(0.005)).await;
@@ -111,7 +132,11 @@ async fn a_graceful_shutdown_interrupts_running_jobs_and_keeps_queued_ones() {
     let waiting = app.submit(&tiny_case(0.002)).await;
     let started = Instant::now();
     app.stop().await;
-    assert!(started.elapsed() < Duration::from_secs(20), "shutdown took {:?}", started.elapsed());
+    assert!(
+        started.elapsed() < Duration::from_secs(20),
+        "shutdown took {:?}",
+        started.elapsed()
+    );
 
     let app = spawn_app_on(data, |c| c.workers = 1).await;
     let job = app.job(&running).await;

@@ -8,18 +8,34 @@ use serde_json::Value;
 use std::sync::LazyLock;
 
 pub static OPENAPI: LazyLock<Value> = LazyLock::new(|| {
-    let text = std::fs::read_to_string(concat!(env!("CARGO_MANIFEST_DIR"), "/api/openapi.yaml")).unwrap();
+    let text =
+        std::fs::read_to_string(concat!(env!("CARGO_MANIFEST_DIR"), "/api/openapi.yaml")).unwrap();
     serde_norway::from_str(&text).expect("api/openapi.yaml parses")
 });
 
 const KNOWN: &[&str] = &[
-    "$ref", "type", "enum", "required", "properties", "additionalProperties", "items", "oneOf", "minimum",
-    "maximum", "format", "description", "default", "example",
+    "$ref",
+    "type",
+    "enum",
+    "required",
+    "properties",
+    "additionalProperties",
+    "items",
+    "oneOf",
+    "minimum",
+    "maximum",
+    "format",
+    "description",
+    "default",
+    "example",
 ];
 
 fn resolve<'a>(doc: &'a Value, reference: &str) -> &'a Value {
-    let pointer = reference.strip_prefix('#').unwrap_or_else(|| panic!("only local refs: {reference}"));
-    doc.pointer(pointer).unwrap_or_else(|| panic!("dangling $ref {reference}"))
+    let pointer = reference
+        .strip_prefix('#')
+        .unwrap_or_else(|| panic!("only local refs: {reference}"));
+    doc.pointer(pointer)
+        .unwrap_or_else(|| panic!("dangling $ref {reference}"))
 }
 
 fn type_matches(t: &str, v: &Value) -> bool {
@@ -38,9 +54,14 @@ fn type_matches(t: &str, v: &Value) -> bool {
 /// Errors of `value` against `schema` (empty when it conforms).
 pub fn check(doc: &Value, schema: &Value, value: &Value, at: &str) -> Vec<String> {
     let mut errors = Vec::new();
-    let Some(s) = schema.as_object() else { return errors };
+    let Some(s) = schema.as_object() else {
+        return errors;
+    };
     for key in s.keys() {
-        assert!(KNOWN.contains(&key.as_str()), "schema keyword {key} at {at} is not supported by the checker");
+        assert!(
+            KNOWN.contains(&key.as_str()),
+            "schema keyword {key} at {at} is not supported by the checker"
+        );
     }
     if let Some(Value::String(r)) = s.get("$ref") {
         errors.extend(check(doc, resolve(doc, r), value, at));
@@ -72,9 +93,14 @@ pub fn check(doc: &Value, schema: &Value, value: &Value, at: &str) -> Vec<String
         }
     }
     if let Some(Value::Array(options)) = s.get("oneOf") {
-        let matching = options.iter().filter(|o| check(doc, o, value, at).is_empty()).count();
+        let matching = options
+            .iter()
+            .filter(|o| check(doc, o, value, at).is_empty())
+            .count();
         if matching != 1 {
-            errors.push(format!("{at}: {value} matches {matching} of the oneOf options, not exactly one"));
+            errors.push(format!(
+                "{at}: {value} matches {matching} of the oneOf options, not exactly one"
+            ));
         }
     }
     if let Value::Object(map) = value {
@@ -92,7 +118,9 @@ pub fn check(doc: &Value, schema: &Value, value: &Value, at: &str) -> Vec<String
                 errors.extend(check(doc, p, v, &here));
             } else {
                 match s.get("additionalProperties") {
-                    Some(Value::Bool(false)) => errors.push(format!("{at}: unexpected property {k}")),
+                    Some(Value::Bool(false)) => {
+                        errors.push(format!("{at}: unexpected property {k}"))
+                    }
                     Some(extra @ Value::Object(_)) => errors.extend(check(doc, extra, v, &here)),
                     _ => {}
                 }
@@ -126,7 +154,13 @@ pub fn response_spec(method: &str, path: &str, status: u16) -> &'static Value {
 pub fn assert_conforms(method: &str, path: &str, status: u16, body: &Value) {
     let spec = response_spec(method, path, status);
     let schema = &spec["content"]["application/json"]["schema"];
-    assert!(!schema.is_null(), "{method} {path} {status} documents no JSON body");
+    assert!(
+        !schema.is_null(),
+        "{method} {path} {status} documents no JSON body"
+    );
     let errors = check(&OPENAPI, schema, body, "$");
-    assert!(errors.is_empty(), "{method} {path} {status} does not match api/openapi.yaml: {errors:#?}\n{body:#}");
+    assert!(
+        errors.is_empty(),
+        "{method} {path} {status} does not match api/openapi.yaml: {errors:#?}\n{body:#}"
+    );
 }

@@ -32,7 +32,10 @@ async fn submitted_case_succeeds_and_serves_the_same_files_as_run_case() {
     let direct_dir = fresh_data_dir("direct");
     let parsed = parse_case_value(case.clone()).unwrap();
     let out = direct_dir.clone();
-    let summary = tokio::task::spawn_blocking(move || run_case(&parsed, &out, &mut Quiet)).await.unwrap().unwrap();
+    let summary = tokio::task::spawn_blocking(move || run_case(&parsed, &out, &mut Quiet))
+        .await
+        .unwrap()
+        .unwrap();
     assert_eq!(job["summary"]["steps"], summary.steps);
     assert_eq!(job["particles"], summary.particles);
 
@@ -42,7 +45,10 @@ async fn submitted_case_succeeds_and_serves_the_same_files_as_run_case() {
         assert!(content_type.starts_with("text/csv"), "{content_type}");
         let direct = std::fs::read_to_string(direct_dir.join(file)).unwrap();
         assert!(direct.lines().count() > 1, "{file} has rows");
-        assert_eq!(served, direct, "{route} CSV differs from what run_case writes");
+        assert_eq!(
+            served, direct,
+            "{route} CSV differs from what run_case writes"
+        );
     }
 
     // JSON columns hold the same numbers as the CSV rows.
@@ -50,21 +56,37 @@ async fn submitted_case_succeeds_and_serves_the_same_files_as_run_case() {
     assert_eq!(status, 200);
     assert_conforms("GET", "/v1/jobs/{id}/loads", 200, &loads);
     let direct = std::fs::read_to_string(direct_dir.join("loads.csv")).unwrap();
-    let rows: Vec<Vec<&str>> = direct.lines().skip(1).map(|l| l.split(',').collect()).collect();
+    let rows: Vec<Vec<&str>> = direct
+        .lines()
+        .skip(1)
+        .map(|l| l.split(',').collect())
+        .collect();
     let tank = &loads["bodies"]["tank"];
     let tank_rows: Vec<&Vec<&str>> = rows.iter().filter(|r| r[1] == "tank").collect();
     assert_eq!(tank["time"].as_array().unwrap().len(), tank_rows.len());
     for (k, row) in tank_rows.iter().enumerate() {
         for (col, name) in [(0, "time"), (2, "fx"), (3, "fy"), (4, "mz")] {
             // serde_json's default float parser (client side) may be off by an ulp.
-            let (served, written) = (tank[name][k].as_f64().unwrap(), row[col].parse::<f64>().unwrap());
-            assert!((served - written).abs() <= 1e-15 * written.abs(), "{name}[{k}]: {served} vs {written}");
+            let (served, written) = (
+                tank[name][k].as_f64().unwrap(),
+                row[col].parse::<f64>().unwrap(),
+            );
+            assert!(
+                (served - written).abs() <= 1e-15 * written.abs(),
+                "{name}[{k}]: {served} vs {written}"
+            );
         }
     }
     let (status, probes) = app.get_json(&format!("/v1/jobs/{id}/probes")).await;
     assert_eq!(status, 200);
     assert_conforms("GET", "/v1/jobs/{id}/probes", 200, &probes);
-    assert!(probes["probes"]["mid"]["pressure"].as_array().unwrap().len() > 1);
+    assert!(
+        probes["probes"]["mid"]["pressure"]
+            .as_array()
+            .unwrap()
+            .len()
+            > 1
+    );
 
     // No bodies in this case: bodies is an empty series, not an error.
     let (status, bodies) = app.get_json(&format!("/v1/jobs/{id}/bodies")).await;
@@ -72,11 +94,20 @@ async fn submitted_case_succeeds_and_serves_the_same_files_as_run_case() {
     assert_conforms("GET", "/v1/jobs/{id}/bodies", 200, &bodies);
 
     // The plot is an SVG naming the series.
-    let svg = app.client.get(app.url(&format!("/v1/jobs/{id}/loads.svg"))).send().await.unwrap();
+    let svg = app
+        .client
+        .get(app.url(&format!("/v1/jobs/{id}/loads.svg")))
+        .send()
+        .await
+        .unwrap();
     assert_eq!(svg.status().as_u16(), 200);
     assert_eq!(svg.headers()["content-type"], "image/svg+xml");
     let svg = svg.text().await.unwrap();
-    assert!(svg.starts_with("<svg") && svg.contains("tank"), "{}", &svg[..svg.len().min(300)]);
+    assert!(
+        svg.starts_with("<svg") && svg.contains("tank"),
+        "{}",
+        &svg[..svg.len().min(300)]
+    );
 
     // The run directory keeps the case as submitted.
     let saved = std::fs::read(app.data_dir.join("jobs").join(&id).join("case.json")).unwrap();
@@ -95,7 +126,12 @@ async fn submitted_case_succeeds_and_serves_the_same_files_as_run_case() {
     assert_conforms("GET", "/v1/jobs", 400, &bad);
 
     // A finished job cannot be cancelled.
-    let r = app.client.delete(app.url(&format!("/v1/jobs/{id}"))).send().await.unwrap();
+    let r = app
+        .client
+        .delete(app.url(&format!("/v1/jobs/{id}")))
+        .send()
+        .await
+        .unwrap();
     assert_eq!(r.status().as_u16(), 409);
     let body: Value = r.json().await.unwrap();
     assert_conforms("DELETE", "/v1/jobs/{id}", 409, &body);
@@ -117,7 +153,14 @@ async fn listing_pages_newest_first() {
     let (_, page3) = app.get_json("/v1/jobs?limit=2&offset=4").await;
     let listed: Vec<String> = [page1, page2, page3]
         .iter()
-        .flat_map(|p| p["jobs"].as_array().unwrap().iter().map(|j| j["id"].as_str().unwrap().to_string()).collect::<Vec<_>>())
+        .flat_map(|p| {
+            p["jobs"]
+                .as_array()
+                .unwrap()
+                .iter()
+                .map(|j| j["id"].as_str().unwrap().to_string())
+                .collect::<Vec<_>>()
+        })
         .collect();
     let newest_first: Vec<String> = ids.iter().rev().cloned().collect();
     assert_eq!(listed, newest_first);

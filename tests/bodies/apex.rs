@@ -53,7 +53,13 @@ fn particle_near_wedge_apex_gets_full_lattice_number_density() {
     let mut worst_flat: Real = 0.0;
     let mut worst_scene: Real = 0.0;
     let mut checked = 0;
-    for (ox, oy) in [(0.0, 0.0), (0.3, 0.0), (0.0, 0.37), (0.21, 0.44), (0.5, 0.5)] {
+    for (ox, oy) in [
+        (0.0, 0.0),
+        (0.3, 0.0),
+        (0.0, 0.37),
+        (0.21, 0.44),
+        (0.5, 0.5),
+    ] {
         let case = shipped(
             "wedge_free_fall.json",
             &[
@@ -66,13 +72,25 @@ fn particle_near_wedge_apex_gets_full_lattice_number_density() {
         let prm = &sim.params;
         let k = sim.walls.iter().position(|w| w.body.is_some()).unwrap();
         let placed = PlacedWall::new(&sim.walls[k], sim.walls[k].state);
-        let kernels = WallKernels { l0, re: prm.re, re_lap: prm.re_lap };
-        let weights = Weights { re: prm.re, re_lap: prm.re_lap };
+        let kernels = WallKernels {
+            l0,
+            re: prm.re,
+            re_lap: prm.re_lap,
+        };
+        let weights = Weights {
+            re: prm.re,
+            re_lap: prm.re_lap,
+        };
         let apex = sim.walls[k].state.position;
         let x = &sim.particles.position;
         // the full lattice of the scene (anchored half a spacing inside the fluid
         // block's lower-left corner at (-1, -1)), split into fluid and solid points
-        let lattice = |p: Vec2| Vec2::new(-1.0 + ((p.x + 1.0) / l0).floor() * l0 + 0.5 * l0, -1.0 + ((p.y + 1.0) / l0).floor() * l0 + 0.5 * l0);
+        let lattice = |p: Vec2| {
+            Vec2::new(
+                -1.0 + ((p.x + 1.0) / l0).floor() * l0 + 0.5 * l0,
+                -1.0 + ((p.y + 1.0) / l0).floor() * l0 + 0.5 * l0,
+            )
+        };
         let edges = &placed.loop_edges;
         for i in 0..x.len() {
             if (x[i] - apex).norm() > 1.6 * l0 || x[i].y > apex.y + 0.5 * l0 {
@@ -97,8 +115,13 @@ fn particle_near_wedge_apex_gets_full_lattice_number_density() {
                 }
             }
             // the scene's own particles (the lattice minus those within l0/2 of the surface)
-            let fluid_scene: Real = (0..x.len()).filter(|&j| j != i).map(|j| Koshizuka::w((x[j] - x[i]).norm(), prm.re)).sum();
-            let (xw, d) = placed.nearest(x[i], prm.re.max(prm.re_lap)).expect("particle near the apex sees the wedge");
+            let fluid_scene: Real = (0..x.len())
+                .filter(|&j| j != i)
+                .map(|j| Koshizuka::w((x[j] - x[i]).norm(), prm.re))
+                .sum();
+            let (xw, d) = placed
+                .nearest(x[i], prm.re.max(prm.re_lap))
+                .expect("particle near the apex sees the wedge");
             let (terms, _, penetrated) = wall_terms(x[i], xw, &placed, &kernels, &weights);
             assert!(!penetrated);
             let err = (fluid_full + terms.number_density) / prm.n0 - 1.0;
@@ -122,7 +145,12 @@ fn particle_near_wedge_apex_gets_full_lattice_number_density() {
     println!("apex: {checked} particles, worst |n/n0 - 1| = {worst:.4} (flat-wall table {worst_flat:.4}; scene particles instead of the full lattice {worst_scene:.4})");
     assert!(checked >= 5, "too few particles near the apex: {checked}");
     // what the engine computes at t = 0: the scene's particles plus the wall terms
-    assert!(worst_scene < 0.03, "number density near the apex off by {:.2} % (full lattice outside the wedge: {:.2} %)", 100.0 * worst_scene, 100.0 * worst);
+    assert!(
+        worst_scene < 0.03,
+        "number density near the apex off by {:.2} % (full lattice outside the wedge: {:.2} %)",
+        100.0 * worst_scene,
+        100.0 * worst
+    );
 }
 
 /// The lattice-compatible corner: a box corner (a convex 90° apex) with both faces on
@@ -135,14 +163,24 @@ fn particle_near_convex_box_corner_gets_full_lattice_number_density() {
     let l0 = 0.01;
     let case = shipped(
         "floating_box.json",
-        &["bodies.0.position=[0.0, -0.35]".into(), r#"bodies.0.motion={"type": "prescribed", "velocity": [0.0, 0.0]}"#.into()],
+        &[
+            "bodies.0.position=[0.0, -0.35]".into(),
+            r#"bodies.0.motion={"type": "prescribed", "velocity": [0.0, 0.0]}"#.into(),
+        ],
     );
     let sim = Simulation::new(&case);
     let prm = &sim.params;
     let k = sim.walls.iter().position(|w| w.body.is_some()).unwrap();
     let placed = PlacedWall::new(&sim.walls[k], sim.walls[k].state);
-    let kernels = WallKernels { l0, re: prm.re, re_lap: prm.re_lap };
-    let weights = Weights { re: prm.re, re_lap: prm.re_lap };
+    let kernels = WallKernels {
+        l0,
+        re: prm.re,
+        re_lap: prm.re_lap,
+    };
+    let weights = Weights {
+        re: prm.re,
+        re_lap: prm.re_lap,
+    };
     let corner = Vec2::new(-0.2, -0.35);
     let x = &sim.particles.position;
     let (mut worst, mut worst_flat, mut checked) = (0.0_f64, 0.0_f64, 0);
@@ -152,17 +190,27 @@ fn particle_near_convex_box_corner_gets_full_lattice_number_density() {
         if !(r.x < 0.0 && r.y < 0.0 && r.norm() < 2.0 * l0) {
             continue;
         }
-        let fluid: Real = (0..x.len()).filter(|&j| j != i).map(|j| Koshizuka::w((x[j] - x[i]).norm(), prm.re)).sum();
+        let fluid: Real = (0..x.len())
+            .filter(|&j| j != i)
+            .map(|j| Koshizuka::w((x[j] - x[i]).norm(), prm.re))
+            .sum();
         let (xw, d) = placed.nearest(x[i], prm.re.max(prm.re_lap)).unwrap();
         let (terms, _, _) = wall_terms(x[i], xw, &placed, &kernels, &weights);
         let err = (fluid + terms.number_density) / prm.n0 - 1.0;
         let flat = (fluid + flat_wall_z(d, l0, prm.re)) / prm.n0 - 1.0;
-        println!("box corner, particle at {:?} l0: n/n0 - 1 = {err:+.4} (flat-wall table {flat:+.4})", (r / l0).as_slice());
+        println!(
+            "box corner, particle at {:?} l0: n/n0 - 1 = {err:+.4} (flat-wall table {flat:+.4})",
+            (r / l0).as_slice()
+        );
         worst = worst.max(err.abs());
         worst_flat = worst_flat.max(flat.abs());
         checked += 1;
     }
     println!("box corner: {checked} particles, worst |n/n0 - 1| = {worst:.4} (flat-wall table {worst_flat:.4})");
     assert!(checked >= 3);
-    assert!(worst < 0.03, "number density at a convex corner off by {:.2} %", 100.0 * worst);
+    assert!(
+        worst < 0.03,
+        "number density at a convex corner off by {:.2} %",
+        100.0 * worst
+    );
 }

@@ -11,7 +11,9 @@ use std::time::Instant;
 pub const RHO: Real = 1000.0;
 
 pub fn case_path(name: &str) -> PathBuf {
-    PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("cases").join(name)
+    PathBuf::from(env!("CARGO_MANIFEST_DIR"))
+        .join("cases")
+        .join(name)
 }
 
 /// A shipped case with `--set`-style overrides.
@@ -56,12 +58,20 @@ pub struct Trace {
 
 impl Trace {
     pub fn wall(&self, name: &str) -> usize {
-        self.wall_names.iter().position(|n| n == name).unwrap_or_else(|| panic!("no wall {name}"))
+        self.wall_names
+            .iter()
+            .position(|n| n == name)
+            .unwrap_or_else(|| panic!("no wall {name}"))
     }
 }
 
 /// Run `case` to `end` (or its own end time), stepping the coupling around every step.
-pub fn run(case: &Case, options: CouplingOptions, end: Option<Real>, mut each: impl FnMut(&Simulation)) -> Trace {
+pub fn run(
+    case: &Case,
+    options: CouplingOptions,
+    end: Option<Real>,
+    mut each: impl FnMut(&Simulation),
+) -> Trace {
     let clock = Instant::now();
     let mut sim = Simulation::new(case);
     let mut coupling = Coupling::with_options(case, &sim, options).expect("case has bodies");

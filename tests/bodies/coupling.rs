@@ -9,7 +9,10 @@ use mpsfsi::engine::Simulation;
 fn no_rapier_pipeline_without_bodies() {
     let case = shipped("floating_box.json", &["bodies=[]".into()]);
     let sim = Simulation::new(&case);
-    assert!(Coupling::new(&case, &sim).is_none(), "a case without bodies must not build a rapier pipeline");
+    assert!(
+        Coupling::new(&case, &sim).is_none(),
+        "a case without bodies must not build a rapier pipeline"
+    );
     let case = shipped("floating_box.json", &[]);
     let sim = Simulation::new(&case);
     assert_eq!(Coupling::new(&case, &sim).map(|c| c.len()), Some(1));
@@ -41,12 +44,28 @@ fn prescribed_velocity_table_is_integrated_exactly() {
     let expect_angle = 2.0 * (t1 / 2.0 + t2);
     let (x0, y0) = (trace.initial[0].x, trace.initial[0].y);
     let last = &trace.steps.last().unwrap().bodies[0];
-    assert!((last.angle - expect_angle).abs() < 1e-9, "angle {} vs {expect_angle}", last.angle);
+    assert!(
+        (last.angle - expect_angle).abs() < 1e-9,
+        "angle {} vs {expect_angle}",
+        last.angle
+    );
     // the centre of mass moves with the origin plus the rotation of the centroid offset
     // (centroid (0, 0.1) in the body frame, origin moved by ∫v: rotation about the CoM)
-    assert!(((last.x - x0) - expect_x).abs() < 1e-9, "dx {} vs {expect_x}", last.x - x0);
-    assert!(((last.y - y0) - expect_y).abs() < 1e-9, "dy {} vs {expect_y}", last.y - y0);
-    assert!((last.vx - 0.5).abs() < 1e-12 && (last.vy + 1.0).abs() < 1e-12 && (last.omega - 2.0).abs() < 1e-12);
+    assert!(
+        ((last.x - x0) - expect_x).abs() < 1e-9,
+        "dx {} vs {expect_x}",
+        last.x - x0
+    );
+    assert!(
+        ((last.y - y0) - expect_y).abs() < 1e-9,
+        "dy {} vs {expect_y}",
+        last.y - y0
+    );
+    assert!(
+        (last.vx - 0.5).abs() < 1e-12
+            && (last.vy + 1.0).abs() < 1e-12
+            && (last.omega - 2.0).abs() < 1e-12
+    );
 }
 
 /// Rows `time,name,values...` of a run's CSV file for one name.
@@ -57,7 +76,11 @@ fn csv_rows(path: &std::path::Path, name: &str) -> Vec<Vec<f64>> {
         .filter_map(|l| {
             let mut f = l.split(',');
             let t: f64 = f.next()?.parse().ok()?;
-            (f.next()? == name).then(|| std::iter::once(t).chain(f.map(|v| v.parse::<f64>().unwrap())).collect())
+            (f.next()? == name).then(|| {
+                std::iter::once(t)
+                    .chain(f.map(|v| v.parse::<f64>().unwrap()))
+                    .collect()
+            })
         })
         .collect()
 }
@@ -73,7 +96,8 @@ fn free_fall_wedge_velocity_matches_its_own_loads() {
     let case = shipped("wedge_free_fall.json", &["particle_spacing=0.01".into()]);
     let dir = std::env::temp_dir().join(format!("mpsfsi-bodies-free-fall-{}", std::process::id()));
     let clock = std::time::Instant::now();
-    let summary = mpsfsi::run::run_case(&case, &dir, &mut mpsfsi::run::Quiet).expect("run failed to write");
+    let summary =
+        mpsfsi::run::run_case(&case, &dir, &mut mpsfsi::run::Quiet).expect("run failed to write");
     assert!(summary.reason.is_none(), "{:?}", summary.reason);
     let loads = csv_rows(&dir.join("loads.csv"), "wedge"); // time, fx, fy, mz
     let bodies = csv_rows(&dir.join("bodies.csv"), "wedge"); // time, x, y, angle, vx, vy, omega
@@ -104,7 +128,8 @@ fn free_fall_wedge_velocity_matches_its_own_loads() {
     // each lattice row (references.md: filter over a few discreteness periods), and
     // between bursts it can fall below the weight.
     let (c_f, speed0) = (14.04, -v0);
-    let start_time = 3.0 * mass * g.abs() / (c_f * RHO * speed0.powi(3)) + case.particle_spacing / speed0;
+    let start_time =
+        3.0 * mass * g.abs() / (c_f * RHO * speed0.powi(3)) + case.particle_spacing / speed0;
     let period = 2.0 * case.particle_spacing / speed0;
     let mut next = start_time;
     let mut last_speed = f64::INFINITY;
@@ -112,14 +137,26 @@ fn free_fall_wedge_velocity_matches_its_own_loads() {
     for b in bodies.iter().filter(|b| b[0] >= start_time) {
         if b[0] + 1e-12 >= next {
             samples.push((b[0], -b[5]));
-            assert!(-b[5] <= last_speed + 1e-9, "downward speed rose from {last_speed} to {} at t = {}", -b[5], b[0]);
+            assert!(
+                -b[5] <= last_speed + 1e-9,
+                "downward speed rose from {last_speed} to {} at t = {}",
+                -b[5],
+                b[0]
+            );
             last_speed = -b[5];
             next += period;
         }
     }
-    println!("free fall: downward speed every {:.2} ms from {:.2} ms: {samples:.4?}", 1e3 * period, 1e3 * start_time);
+    println!(
+        "free fall: downward speed every {:.2} ms from {:.2} ms: {samples:.4?}",
+        1e3 * period,
+        1e3 * start_time
+    );
     assert!(samples.len() >= 4);
-    assert!(-bodies.last().unwrap()[5] < speed0, "the wedge did not slow down");
+    assert!(
+        -bodies.last().unwrap()[5] < speed0,
+        "the wedge did not slow down"
+    );
     let _ = std::fs::remove_dir_all(&dir);
 }
 
@@ -130,7 +167,8 @@ trait MotionVelocity {
 impl MotionVelocity for mpsfsi::case::Body {
     fn motion_velocity_y(&self) -> f64 {
         match &self.motion {
-            mpsfsi::case::Motion::Free { velocity, .. } | mpsfsi::case::Motion::Prescribed { velocity, .. } => velocity[1],
+            mpsfsi::case::Motion::Free { velocity, .. }
+            | mpsfsi::case::Motion::Prescribed { velocity, .. } => velocity[1],
         }
     }
 }
@@ -154,10 +192,17 @@ fn oscillation(v: &[f64]) -> f64 {
 fn added_mass_stabilisation_on_the_model_problem() {
     let (m_body, m_a, f_ext, dt) = (40.0, 200.0, 1000.0, 1.0e-3);
     let exact = f_ext / (m_body + m_a);
-    let case = shipped("floating_box.json", &["fluid.gravity=[0.0, 0.0]".into(), "particle_spacing=0.05".into()]);
+    let case = shipped(
+        "floating_box.json",
+        &[
+            "fluid.gravity=[0.0, 0.0]".into(),
+            "particle_spacing=0.05".into(),
+        ],
+    );
     let run_model = |added_mass: AddedMass, steps: usize| -> Vec<f64> {
         let mut sim = Simulation::new(&case);
-        let mut coupling = Coupling::with_options(&case, &sim, CouplingOptions { added_mass }).unwrap();
+        let mut coupling =
+            Coupling::with_options(&case, &sim, CouplingOptions { added_mass }).unwrap();
         let k = sim.walls.iter().position(|w| w.body.is_some()).unwrap();
         let (mut v_prev, mut a_prev) = (0.0, 0.0);
         let mut acc = Vec::new();
@@ -171,24 +216,56 @@ fn added_mass_stabilisation_on_the_model_problem() {
         }
         acc
     };
-    let report = |name: &str, a: &[f64]| println!("model problem, {name}: a = {:?} ... {:.4e} (exact {exact:.4})", &a[..4], a[a.len() - 1]);
+    let report = |name: &str, a: &[f64]| {
+        println!(
+            "model problem, {name}: a = {:?} ... {:.4e} (exact {exact:.4})",
+            &a[..4],
+            a[a.len() - 1]
+        )
+    };
     let plain = run_model(AddedMass::Off, 20);
     report("plain", &plain);
     // (rapier caps speeds at 400 m/s, which bounds the blow-up)
-    assert!(plain[19].abs() > 1e4 * exact, "plain explicit coupling with m_a / M = 5 must diverge");
-    let exact_estimate = run_model(AddedMass::Constant { mass: m_a, inertia: 0.0 }, 20);
+    assert!(
+        plain[19].abs() > 1e4 * exact,
+        "plain explicit coupling with m_a / M = 5 must diverge"
+    );
+    let exact_estimate = run_model(
+        AddedMass::Constant {
+            mass: m_a,
+            inertia: 0.0,
+        },
+        20,
+    );
     report("m~ = m_a", &exact_estimate);
-    assert!(exact_estimate.iter().all(|a| (a - exact).abs() < 1e-9 * exact), "m~ = m_a must give the exact acceleration at once");
+    assert!(
+        exact_estimate
+            .iter()
+            .all(|a| (a - exact).abs() < 1e-9 * exact),
+        "m~ = m_a must give the exact acceleration at once"
+    );
     for (estimate, stable) in [(2.0 * m_a, true), (0.6 * m_a, true), (0.3 * m_a, false)] {
         // amplification (m~ - m_a) / (M + m~)
         let factor: f64 = (estimate - m_a) / (m_body + estimate);
-        let a = run_model(AddedMass::Constant { mass: estimate, inertia: 0.0 }, 200);
+        let a = run_model(
+            AddedMass::Constant {
+                mass: estimate,
+                inertia: 0.0,
+            },
+            200,
+        );
         report(&format!("m~ = {estimate}"), &a);
         let err = (a[199] - exact).abs() / exact;
         if stable {
-            assert!(err < 2.0 * factor.abs().powi(199) + 1e-9, "m~ = {estimate}: error {err:.3e}");
+            assert!(
+                err < 2.0 * factor.abs().powi(199) + 1e-9,
+                "m~ = {estimate}: error {err:.3e}"
+            );
         } else {
-            assert!(err > 1e3, "m~ = {estimate} is below (m_a - M) / 2 and must diverge (error {err:.3e})");
+            assert!(
+                err > 1e3,
+                "m~ = {estimate} is below (m_a - M) / 2 and must diverge (error {err:.3e})"
+            );
         }
     }
 }
@@ -200,13 +277,27 @@ fn added_mass_stabilisation_on_the_model_problem() {
 /// stable too; the model problem above shows the instability itself.)
 #[test]
 fn light_wedge_enters_without_added_mass_instability() {
-    let mut overrides = vec!["particle_spacing=0.01".to_string(), "bodies.0.motion.mass=20.0".into()];
+    let mut overrides = vec![
+        "particle_spacing=0.01".to_string(),
+        "bodies.0.motion.mass=20.0".into(),
+    ];
     overrides.extend(tank(0.6, 0.4, 0.4));
     let case = shipped("wedge_free_fall.json", &overrides);
     let end = Some(0.012);
-    let vy = |t: &Trace| -> Vec<f64> { std::iter::once(t.initial[0].vy).chain(t.steps.iter().map(|s| s.bodies[0].vy)).collect() };
+    let vy = |t: &Trace| -> Vec<f64> {
+        std::iter::once(t.initial[0].vy)
+            .chain(t.steps.iter().map(|s| s.bodies[0].vy))
+            .collect()
+    };
     let stable = run(&case, CouplingOptions::default(), end, |_| {});
-    let plain = run(&case, CouplingOptions { added_mass: AddedMass::Off }, end, |_| {});
+    let plain = run(
+        &case,
+        CouplingOptions {
+            added_mass: AddedMass::Off,
+        },
+        end,
+        |_| {},
+    );
     let (vs, vp) = (vy(&stable), vy(&plain));
     let (os, op) = (oscillation(&vs), oscillation(&vp));
     println!(
@@ -221,7 +312,10 @@ fn light_wedge_enters_without_added_mass_instability() {
     );
     assert!(stable.error.is_none(), "{:?}", stable.error);
     assert!(os < 0.1, "stabilised light wedge oscillates: {os:.3}");
-    assert!(vs.last().unwrap().abs() < 0.8 * 6.15, "the light wedge should lose much of its speed");
+    assert!(
+        vs.last().unwrap().abs() < 0.8 * 6.15,
+        "the light wedge should lose much of its speed"
+    );
 }
 
 /// Contact goes through rapier: a free box dropped in air onto a fixed wall (a shelf
@@ -239,10 +333,25 @@ fn free_body_lands_on_a_fixed_wall() {
     );
     let trace = run(&case, CouplingOptions::default(), Some(0.5), |_| {});
     assert!(trace.error.is_none(), "{:?}", trace.error);
-    let lowest = trace.steps.iter().map(|s| s.bodies[0].y - 0.1).fold(f64::INFINITY, f64::min);
+    let lowest = trace
+        .steps
+        .iter()
+        .map(|s| s.bodies[0].y - 0.1)
+        .fold(f64::INFINITY, f64::min);
     let last = &trace.steps.last().unwrap().bodies[0];
-    println!("box on shelf: bottom at {:.5} m (lowest {:.5} m), v_y {:.2e} m/s", last.y - 0.1, lowest, last.vy);
+    println!(
+        "box on shelf: bottom at {:.5} m (lowest {:.5} m), v_y {:.2e} m/s",
+        last.y - 0.1,
+        lowest,
+        last.vy
+    );
     // free fall from 0.1 m above would take 0.14 s; by 0.5 s it rests on the shelf
-    assert!(lowest > 0.1 - 0.005, "the box went through the shelf: bottom at {lowest:.4} m");
-    assert!((last.y - 0.1 - 0.1).abs() < 0.005 && last.vy.abs() < 0.05, "box not at rest on the shelf: {last:?}");
+    assert!(
+        lowest > 0.1 - 0.005,
+        "the box went through the shelf: bottom at {lowest:.4} m"
+    );
+    assert!(
+        (last.y - 0.1 - 0.1).abs() < 0.005 && last.vy.abs() < 0.05,
+        "box not at rest on the shelf: {last:?}"
+    );
 }

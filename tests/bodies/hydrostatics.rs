@@ -35,7 +35,10 @@ fn fixed_submerged_body_carries_its_buoyancy() {
         trace.wall_seconds
     );
     assert!(err.abs() < 0.02, "buoyancy off by {:.2} %", 100.0 * err);
-    assert!(fx.abs() < 0.02 * expect, "net horizontal force {fx:.2} N/m on a symmetric body");
+    assert!(
+        fx.abs() < 0.02 * expect,
+        "net horizontal force {fx:.2} N/m on a symmetric body"
+    );
 }
 
 /// A box of half the density of water (0.4 m wide, 40 kg/m) released 1 cm above its
@@ -63,14 +66,22 @@ fn floating_box_settles_at_archimedes_draft() {
     let end = trace.steps.last().unwrap().time;
     // centroid is 0.1 m above the bottom
     let bottom: Vec<f64> = trace.steps.iter().map(|s| s.bodies[0].y - 0.1).collect();
-    let window = |from: f64, to: f64| -> Vec<usize> { (0..trace.steps.len()).filter(|&i| trace.steps[i].time >= from && trace.steps[i].time < to).collect() };
+    let window = |from: f64, to: f64| -> Vec<usize> {
+        (0..trace.steps.len())
+            .filter(|&i| trace.steps[i].time >= from && trace.steps[i].time < to)
+            .collect()
+    };
     let last = window(end - 1.0, end + 1.0);
-    let mean = |idx: &[usize], f: &dyn Fn(usize) -> f64| idx.iter().map(|&i| f(i)).sum::<f64>() / idx.len() as f64;
+    let mean = |idx: &[usize], f: &dyn Fn(usize) -> f64| {
+        idx.iter().map(|&i| f(i)).sum::<f64>() / idx.len() as f64
+    };
     let draft = mean(&last, &|i| levels[i] - bottom[i]);
     let err = (draft - expect) / expect;
     let amplitude = |idx: &[usize]| {
         let m = mean(idx, &|i| bottom[i]);
-        idx.iter().map(|&i| (bottom[i] - m).abs()).fold(0.0, f64::max)
+        idx.iter()
+            .map(|&i| (bottom[i] - m).abs())
+            .fold(0.0, f64::max)
     };
     let (a_first, a_last) = (amplitude(&window(0.0, 1.0)), amplitude(&last));
     println!(
@@ -82,5 +93,8 @@ fn floating_box_settles_at_archimedes_draft() {
         trace.wall_seconds
     );
     assert!(err.abs() < 0.02, "draft off by {:.2} %", 100.0 * err);
-    assert!(a_last < 0.5 * a_first, "heave does not decay: {a_first:.4} -> {a_last:.4} m");
+    assert!(
+        a_last < 0.5 * a_first,
+        "heave does not decay: {a_first:.4} -> {a_last:.4} m"
+    );
 }

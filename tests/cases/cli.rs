@@ -7,7 +7,10 @@ use std::path::{Path, PathBuf};
 use std::process::{Command, Output};
 
 fn mpsfsi(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_mpsfsi")).args(args).output().expect("mpsfsi runs")
+    Command::new(env!("CARGO_BIN_EXE_mpsfsi"))
+        .args(args)
+        .output()
+        .expect("mpsfsi runs")
 }
 
 fn tiny() -> PathBuf {
@@ -29,24 +32,46 @@ fn text(bytes: &[u8]) -> String {
 #[test]
 fn check_prints_the_particle_count_of_the_scene() {
     let case = load_case_file(&tiny(), &[]).unwrap();
-    let expected = build_scene(&case, &MpsParameters::new(&case)).particles.len();
+    let expected = build_scene(&case, &MpsParameters::new(&case))
+        .particles
+        .len();
     assert!(expected > 0);
     let out = mpsfsi(&["check", tiny().to_str().unwrap()]);
     let stdout = text(&out.stdout);
-    assert!(out.status.success(), "stdout {stdout}\nstderr {}", text(&out.stderr));
-    assert!(stdout.contains(&format!("particles: {expected} ")), "{stdout}");
-    assert!(stdout.contains("estimated steps:") && stdout.contains("n0 = "), "{stdout}");
+    assert!(
+        out.status.success(),
+        "stdout {stdout}\nstderr {}",
+        text(&out.stderr)
+    );
+    assert!(
+        stdout.contains(&format!("particles: {expected} ")),
+        "{stdout}"
+    );
+    assert!(
+        stdout.contains("estimated steps:") && stdout.contains("n0 = "),
+        "{stdout}"
+    );
 }
 
 #[test]
 fn check_applies_overrides() {
-    let out = mpsfsi(&["check", tiny().to_str().unwrap(), "--set", "particle_spacing=0.005"]);
+    let out = mpsfsi(&[
+        "check",
+        tiny().to_str().unwrap(),
+        "--set",
+        "particle_spacing=0.005",
+    ]);
     let stdout = text(&out.stdout);
     assert!(out.status.success(), "{}", text(&out.stderr));
     let mut case = load_case_file(&tiny(), &[]).unwrap();
     case.particle_spacing = 0.005;
-    let expected = build_scene(&case, &MpsParameters::new(&case)).particles.len();
-    assert!(stdout.contains(&format!("particles: {expected} ")), "{stdout}");
+    let expected = build_scene(&case, &MpsParameters::new(&case))
+        .particles
+        .len();
+    assert!(
+        stdout.contains(&format!("particles: {expected} ")),
+        "{stdout}"
+    );
 }
 
 #[test]
@@ -54,45 +79,87 @@ fn check_enforces_a_particle_limit() {
     let out = mpsfsi(&["check", tiny().to_str().unwrap(), "--max-particles", "10"]);
     assert_eq!(out.status.code(), Some(2));
     let stderr = text(&out.stderr);
-    assert!(stderr.contains("particle_spacing:") && stderr.contains("limit of 10"), "{stderr}");
+    assert!(
+        stderr.contains("particle_spacing:") && stderr.contains("limit of 10"),
+        "{stderr}"
+    );
 }
 
 #[test]
 fn run_writes_the_run_directory() {
     let dir = scratch("run");
-    let out = mpsfsi(&["run", tiny().to_str().unwrap(), "--out", dir.to_str().unwrap()]);
+    let out = mpsfsi(&[
+        "run",
+        tiny().to_str().unwrap(),
+        "--out",
+        dir.to_str().unwrap(),
+    ]);
     let (stdout, stderr) = (text(&out.stdout), text(&out.stderr));
     assert!(out.status.success(), "stdout {stdout}\nstderr {stderr}");
-    assert!(stdout.starts_with("succeeded:") && stdout.lines().count() == 1, "{stdout}");
+    assert!(
+        stdout.starts_with("succeeded:") && stdout.lines().count() == 1,
+        "{stdout}"
+    );
     // not a terminal: no progress bar
     assert!(stderr.is_empty(), "{stderr}");
     let loads = std::fs::read_to_string(dir.join("loads.csv")).expect("loads.csv");
     assert!(loads.starts_with("time,body,fx,fy,mz"), "{loads}");
-    assert!(loads.lines().skip(1).any(|l| l.contains(",tank,")), "{loads}");
-    let summary: serde_json::Value =
-        serde_json::from_str(&std::fs::read_to_string(dir.join("summary.json")).expect("summary.json")).unwrap();
+    assert!(
+        loads.lines().skip(1).any(|l| l.contains(",tank,")),
+        "{loads}"
+    );
+    let summary: serde_json::Value = serde_json::from_str(
+        &std::fs::read_to_string(dir.join("summary.json")).expect("summary.json"),
+    )
+    .unwrap();
     assert_eq!(summary["status"], "succeeded");
-    assert!((summary["simulated_time"].as_f64().unwrap() - 0.01).abs() < 1e-9, "{summary}");
+    assert!(
+        (summary["simulated_time"].as_f64().unwrap() - 0.01).abs() < 1e-9,
+        "{summary}"
+    );
     assert!(summary["particles"].as_u64().unwrap() > 0);
 }
 
 #[test]
 fn run_rejects_a_bad_case_with_the_path() {
     let dir = scratch("bad");
-    let out = mpsfsi(&["run", tiny().to_str().unwrap(), "--out", dir.to_str().unwrap(), "--set", "fluid.density=-1"]);
+    let out = mpsfsi(&[
+        "run",
+        tiny().to_str().unwrap(),
+        "--out",
+        dir.to_str().unwrap(),
+        "--set",
+        "fluid.density=-1",
+    ]);
     assert_eq!(out.status.code(), Some(2));
     let stderr = text(&out.stderr);
-    assert!(stderr.contains("fluid.density") && stderr.contains("positive"), "{stderr}");
+    assert!(
+        stderr.contains("fluid.density") && stderr.contains("positive"),
+        "{stderr}"
+    );
     assert_eq!(stderr.trim_end().lines().count(), 1, "one line: {stderr}");
-    assert!(!dir.join("summary.json").exists(), "no work on a rejected case");
+    assert!(
+        !dir.join("summary.json").exists(),
+        "no work on a rejected case"
+    );
 }
 
 #[test]
 fn unknown_scheme_name_reaches_the_user() {
-    let out = mpsfsi(&["check", tiny().to_str().unwrap(), "--set", "scheme.gradient=fancy"]);
+    let out = mpsfsi(&[
+        "check",
+        tiny().to_str().unwrap(),
+        "--set",
+        "scheme.gradient=fancy",
+    ]);
     assert_eq!(out.status.code(), Some(2));
     let stderr = text(&out.stderr);
-    assert!(stderr.contains("scheme.gradient") && stderr.contains("fancy") && stderr.contains("corrected"), "{stderr}");
+    assert!(
+        stderr.contains("scheme.gradient")
+            && stderr.contains("fancy")
+            && stderr.contains("corrected"),
+        "{stderr}"
+    );
 }
 
 #[test]
@@ -104,7 +171,10 @@ fn bad_json_and_missing_file_are_one_line_errors() {
         let out = mpsfsi(&["check", path.to_str().unwrap()]);
         assert_eq!(out.status.code(), Some(2));
         let stderr = text(&out.stderr);
-        assert!(stderr.starts_with("error: invalid case:") && stderr.trim_end().lines().count() == 1, "{stderr}");
+        assert!(
+            stderr.starts_with("error: invalid case:") && stderr.trim_end().lines().count() == 1,
+            "{stderr}"
+        );
     }
 }
 
@@ -131,9 +201,14 @@ fn failed_run_exits_non_zero_and_keeps_its_directory() {
     ]);
     assert_eq!(out.status.code(), Some(1));
     let stderr = text(&out.stderr);
-    assert!(stderr.starts_with("error: run failed:") && stderr.contains("runaway"), "{stderr}");
-    let summary: serde_json::Value =
-        serde_json::from_str(&std::fs::read_to_string(dir.join("summary.json")).expect("summary.json")).unwrap();
+    assert!(
+        stderr.starts_with("error: run failed:") && stderr.contains("runaway"),
+        "{stderr}"
+    );
+    let summary: serde_json::Value = serde_json::from_str(
+        &std::fs::read_to_string(dir.join("summary.json")).expect("summary.json"),
+    )
+    .unwrap();
     assert_eq!(summary["status"], "failed");
     assert!(dir.join("loads.csv").exists(), "what was written stays");
 }
@@ -152,7 +227,14 @@ fn serve_and_bench_parse_their_flags() {
     }
     let out = mpsfsi(&["serve", "--help"]);
     let help = text(&out.stdout);
-    for flag in ["--addr", "--data", "--workers", "--queue-capacity", "--max-particles", "--max-body-bytes"] {
+    for flag in [
+        "--addr",
+        "--data",
+        "--workers",
+        "--queue-capacity",
+        "--max-particles",
+        "--max-body-bytes",
+    ] {
         assert!(help.contains(flag), "{flag} missing: {help}");
     }
 }

@@ -56,7 +56,10 @@ fn creates_missing_objects() {
 #[test]
 fn index_out_of_range() {
     let e = overridden(&["bodies[5].name=x"]).expect_err("only two bodies");
-    assert!(e.path.starts_with("bodies") && e.path.contains('5'), "{e:?}");
+    assert!(
+        e.path.starts_with("bodies") && e.path.contains('5'),
+        "{e:?}"
+    );
     assert!(e.message.contains("out of range"), "{e:?}");
 }
 
@@ -89,7 +92,11 @@ fn wrong_type_after_override() {
 #[test]
 fn overrides_apply_to_files() {
     let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/cases/tiny.json");
-    let case = load_case_file(&path, &["time.end=0.5".into(), "walls[0].name=floor".into()]).unwrap();
+    let case = load_case_file(
+        &path,
+        &["time.end=0.5".into(), "walls[0].name=floor".into()],
+    )
+    .unwrap();
     assert_eq!(case.time.end, 0.5);
     assert_eq!(case.walls[0].name, "floor");
     let untouched = load_case_file(&path, &[]).unwrap();

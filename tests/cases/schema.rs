@@ -21,14 +21,41 @@ fn committed_schema_matches_the_types() {
 #[test]
 fn schema_describes_the_case() {
     let schema: serde_json::Value = serde_json::from_str(&case_schema_json()).unwrap();
-    let required: Vec<&str> = schema["required"].as_array().unwrap().iter().filter_map(|v| v.as_str()).collect();
-    for field in ["name", "fluid", "particle_spacing", "domain", "fluid_blocks", "time"] {
-        assert!(required.contains(&field), "{field} should be required: {required:?}");
+    let required: Vec<&str> = schema["required"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .filter_map(|v| v.as_str())
+        .collect();
+    for field in [
+        "name",
+        "fluid",
+        "particle_spacing",
+        "domain",
+        "fluid_blocks",
+        "time",
+    ] {
+        assert!(
+            required.contains(&field),
+            "{field} should be required: {required:?}"
+        );
     }
-    assert_eq!(schema["additionalProperties"], serde_json::json!(false), "unknown fields are rejected");
+    assert_eq!(
+        schema["additionalProperties"],
+        serde_json::json!(false),
+        "unknown fields are rejected"
+    );
     // the scheme's variant names are listed
     let text = case_schema_json();
-    for name in ["higher_order", "corrected_higher_order", "pcg_jacobi", "wendland_c2"] {
-        assert!(text.contains(&format!("\"{name}\"")), "{name} missing from the schema");
+    for name in [
+        "higher_order",
+        "corrected_higher_order",
+        "pcg_jacobi",
+        "wendland_c2",
+    ] {
+        assert!(
+            text.contains(&format!("\"{name}\"")),
+            "{name} missing from the schema"
+        );
     }
 }

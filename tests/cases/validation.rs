@@ -33,8 +33,10 @@ fn shipped_cases_are_valid() {
     for entry in std::fs::read_dir(&dir).expect("cases/ exists") {
         let path = entry.unwrap().path();
         if path.extension().is_some_and(|e| e == "json") {
-            let case = mpsfsi::case::load_case_file(&path, &[]).unwrap_or_else(|e| panic!("{}: {e}", path.display()));
-            validate(&case, &Limits::default()).unwrap_or_else(|e| panic!("{}: {e}", path.display()));
+            let case = mpsfsi::case::load_case_file(&path, &[])
+                .unwrap_or_else(|e| panic!("{}: {e}", path.display()));
+            validate(&case, &Limits::default())
+                .unwrap_or_else(|e| panic!("{}: {e}", path.display()));
             seen += 1;
         }
     }
@@ -65,8 +67,16 @@ fn non_finite_inside_motion_names_the_tagged_fields() {
 
 #[test]
 fn non_positive_density() {
-    assert_error(&rejected_json(|v| v["fluid"]["density"] = json!(0.0)), "fluid.density", "positive");
-    assert_error(&rejected_json(|v| v["fluid"]["density"] = json!(-1000.0)), "fluid.density", "positive");
+    assert_error(
+        &rejected_json(|v| v["fluid"]["density"] = json!(0.0)),
+        "fluid.density",
+        "positive",
+    );
+    assert_error(
+        &rejected_json(|v| v["fluid"]["density"] = json!(-1000.0)),
+        "fluid.density",
+        "positive",
+    );
 }
 
 #[test]
@@ -84,21 +94,49 @@ fn zero_viscosity_is_allowed() {
 
 #[test]
 fn non_positive_particle_spacing() {
-    assert_error(&rejected_json(|v| v["particle_spacing"] = json!(0.0)), "particle_spacing", "positive");
-    assert_error(&rejected_json(|v| v["particle_spacing"] = json!(-0.01)), "particle_spacing", "positive");
+    assert_error(
+        &rejected_json(|v| v["particle_spacing"] = json!(0.0)),
+        "particle_spacing",
+        "positive",
+    );
+    assert_error(
+        &rejected_json(|v| v["particle_spacing"] = json!(-0.01)),
+        "particle_spacing",
+        "positive",
+    );
 }
 
 #[test]
 fn non_positive_time_control() {
-    assert_error(&rejected_json(|v| v["time"]["end"] = json!(0.0)), "time.end", "positive");
-    assert_error(&rejected_json(|v| v["time"]["cfl"] = json!(-0.2)), "time.cfl", "positive");
-    assert_error(&rejected_json(|v| v["time"]["max_dt"] = json!(0.0)), "time.max_dt", "positive");
+    assert_error(
+        &rejected_json(|v| v["time"]["end"] = json!(0.0)),
+        "time.end",
+        "positive",
+    );
+    assert_error(
+        &rejected_json(|v| v["time"]["cfl"] = json!(-0.2)),
+        "time.cfl",
+        "positive",
+    );
+    assert_error(
+        &rejected_json(|v| v["time"]["max_dt"] = json!(0.0)),
+        "time.max_dt",
+        "positive",
+    );
 }
 
 #[test]
 fn kernel_radii_must_exceed_one_spacing() {
-    assert_error(&rejected_json(|v| v["scheme"]["radius"] = json!(0.0)), "scheme.radius", "greater than 1");
-    assert_error(&rejected_json(|v| v["scheme"]["radius"] = json!(1.0)), "scheme.radius", "greater than 1");
+    assert_error(
+        &rejected_json(|v| v["scheme"]["radius"] = json!(0.0)),
+        "scheme.radius",
+        "greater than 1",
+    );
+    assert_error(
+        &rejected_json(|v| v["scheme"]["radius"] = json!(1.0)),
+        "scheme.radius",
+        "greater than 1",
+    );
     assert_error(
         &rejected_json(|v| v["scheme"]["laplacian_radius"] = json!(-3.1)),
         "scheme.laplacian_radius",
@@ -116,13 +154,21 @@ fn non_positive_solver_tolerance() {
 
 #[test]
 fn scheme_ranges() {
-    assert_error(&rejected_json(|v| v["scheme"]["surface_threshold"] = json!(1.5)), "scheme.surface_threshold", "(0, 1]");
+    assert_error(
+        &rejected_json(|v| v["scheme"]["surface_threshold"] = json!(1.5)),
+        "scheme.surface_threshold",
+        "(0, 1]",
+    );
     assert_error(
         &rejected_json(|v| v["scheme"]["collision_restitution"] = json!(2.0)),
         "scheme.collision_restitution",
         "[0, 1]",
     );
-    assert_error(&rejected_json(|v| v["scheme"]["compressibility"] = json!(-1e-9)), "scheme.compressibility", "negative");
+    assert_error(
+        &rejected_json(|v| v["scheme"]["compressibility"] = json!(-1e-9)),
+        "scheme.compressibility",
+        "negative",
+    );
 }
 
 #[test]
@@ -141,7 +187,11 @@ fn fluid_block_outside_the_domain() {
 
 #[test]
 fn no_fluid_block() {
-    assert_error(&rejected_json(|v| v["fluid_blocks"] = json!([])), "fluid_blocks", "at least one");
+    assert_error(
+        &rejected_json(|v| v["fluid_blocks"] = json!([])),
+        "fluid_blocks",
+        "at least one",
+    );
 }
 
 #[test]
@@ -154,19 +204,33 @@ fn polygon_with_fewer_than_three_vertices() {
 
 #[test]
 fn polygon_with_zero_area() {
-    let e = rejected_json(|v| v["fluid_blocks"][0]["polygon"] = json!([[-0.3, -0.3], [0.0, -0.3], [0.3, -0.3]]));
+    let e = rejected_json(|v| {
+        v["fluid_blocks"][0]["polygon"] = json!([[-0.3, -0.3], [0.0, -0.3], [0.3, -0.3]])
+    });
     assert_error(&e, "fluid_blocks[0].polygon", "zero area");
 }
 
 #[test]
 fn polygon_with_repeated_vertex() {
     let e = rejected_json(|v| {
-        v["bodies"][1]["polygon"] = json!([[-0.02, -0.02], [0.02, -0.02], [0.02, -0.02], [0.02, 0.02], [-0.02, 0.02]])
+        v["bodies"][1]["polygon"] = json!([
+            [-0.02, -0.02],
+            [0.02, -0.02],
+            [0.02, -0.02],
+            [0.02, 0.02],
+            [-0.02, 0.02]
+        ])
     });
     assert_error(&e, "bodies[1].polygon[2]", "repeats");
     // closing the polygon by repeating the first vertex gets a hint
     let e = rejected_json(|v| {
-        v["bodies"][1]["polygon"] = json!([[-0.02, -0.02], [0.02, -0.02], [0.02, 0.02], [-0.02, 0.02], [-0.02, -0.02]])
+        v["bodies"][1]["polygon"] = json!([
+            [-0.02, -0.02],
+            [0.02, -0.02],
+            [0.02, 0.02],
+            [-0.02, 0.02],
+            [-0.02, -0.02]
+        ])
     });
     assert_error(&e, "bodies[1].polygon[0]", "close themselves");
 }
@@ -174,9 +238,15 @@ fn polygon_with_repeated_vertex() {
 #[test]
 fn self_intersecting_polygon() {
     // a bow tie: edges 0-1 and 2-3 cross
-    let e = rejected_json(|v| v["bodies"][1]["polygon"] = json!([[-0.02, -0.02], [0.02, 0.02], [0.02, -0.02], [-0.02, 0.02]]));
+    let e = rejected_json(|v| {
+        v["bodies"][1]["polygon"] =
+            json!([[-0.02, -0.02], [0.02, 0.02], [0.02, -0.02], [-0.02, 0.02]])
+    });
     assert_error(&e, "bodies[1].polygon", "self-intersecting");
-    let e = rejected_json(|v| v["fluid_blocks"][0]["polygon"] = json!([[-0.3, -0.3], [0.3, 0.0], [0.3, -0.3], [-0.3, 0.0]]));
+    let e = rejected_json(|v| {
+        v["fluid_blocks"][0]["polygon"] =
+            json!([[-0.3, -0.3], [0.3, 0.0], [0.3, -0.3], [-0.3, 0.0]])
+    });
     assert_error(&e, "fluid_blocks[0].polygon", "self-intersecting");
 }
 
@@ -192,8 +262,12 @@ fn clockwise_body_polygon() {
 #[test]
 fn clockwise_fluid_block_is_allowed() {
     let mut v = base_value();
-    v["fluid_blocks"][0]["polygon"].as_array_mut().unwrap().reverse();
-    validate(&parse_case_value(v).unwrap(), &Limits::default()).expect("fluid blocks may have either orientation");
+    v["fluid_blocks"][0]["polygon"]
+        .as_array_mut()
+        .unwrap()
+        .reverse();
+    validate(&parse_case_value(v).unwrap(), &Limits::default())
+        .expect("fluid blocks may have either orientation");
 }
 
 #[test]
@@ -210,7 +284,13 @@ fn polyline_with_fewer_than_two_points() {
 #[test]
 fn polyline_with_zero_length_segment() {
     let e = rejected_json(|v| {
-        v["walls"][0]["polyline"] = json!([[-0.3, 0.3], [-0.3, -0.3], [-0.3, -0.3], [0.3, -0.3], [0.3, 0.3]])
+        v["walls"][0]["polyline"] = json!([
+            [-0.3, 0.3],
+            [-0.3, -0.3],
+            [-0.3, -0.3],
+            [0.3, -0.3],
+            [0.3, 0.3]
+        ])
     });
     assert_error(&e, "walls[0].polyline[2]", "zero-length");
 }
@@ -249,7 +329,12 @@ fn bodies_overlapping_each_other() {
 fn body_inside_another_body() {
     // no edges cross: the box lies wholly inside the wedge
     let e = rejected_json(|v| {
-        v["bodies"][1]["polygon"] = json!([[-0.005, -0.005], [0.005, -0.005], [0.005, 0.005], [-0.005, 0.005]]);
+        v["bodies"][1]["polygon"] = json!([
+            [-0.005, -0.005],
+            [0.005, -0.005],
+            [0.005, 0.005],
+            [-0.005, 0.005]
+        ]);
         v["bodies"][1]["position"] = json!([0.0, 0.15]);
     });
     assert_error(&e, "bodies[1]", "overlaps body 'wedge'");
@@ -257,7 +342,11 @@ fn body_inside_another_body() {
 
 #[test]
 fn free_body_with_non_positive_mass_or_inertia() {
-    assert_error(&rejected_json(|v| v["bodies"][1]["motion"]["mass"] = json!(0.0)), "bodies[1].motion.mass", "positive");
+    assert_error(
+        &rejected_json(|v| v["bodies"][1]["motion"]["mass"] = json!(0.0)),
+        "bodies[1].motion.mass",
+        "positive",
+    );
     assert_error(
         &rejected_json(|v| v["bodies"][1]["motion"]["inertia"] = json!(-1.0)),
         "bodies[1].motion.inertia",
@@ -277,21 +366,48 @@ fn velocity_table_not_increasing() {
 fn particle_count_above_the_limit() {
     // 0.6 m x 0.3 m at l0 = 0.01: 1800 particles
     let case = base_case();
-    let e = validate(&case, &Limits { max_particles: 1000 }).expect_err("above the limit");
-    assert_error(&e, "particle_spacing", "estimated from the fluid block areas");
-    assert!(e.message.contains("1800") && e.message.contains("1000"), "{e:?}");
-    validate(&case, &Limits { max_particles: 1800 }).expect("at the limit");
+    let e = validate(
+        &case,
+        &Limits {
+            max_particles: 1000,
+        },
+    )
+    .expect_err("above the limit");
+    assert_error(
+        &e,
+        "particle_spacing",
+        "estimated from the fluid block areas",
+    );
+    assert!(
+        e.message.contains("1800") && e.message.contains("1000"),
+        "{e:?}"
+    );
+    validate(
+        &case,
+        &Limits {
+            max_particles: 1800,
+        },
+    )
+    .expect("at the limit");
 }
 
 #[test]
 fn non_positive_output_intervals() {
-    assert_error(&rejected_json(|v| v["output"]["load_interval"] = json!(0.0)), "output.load_interval", "positive");
+    assert_error(
+        &rejected_json(|v| v["output"]["load_interval"] = json!(0.0)),
+        "output.load_interval",
+        "positive",
+    );
     assert_error(
         &rejected_json(|v| v["output"]["snapshot_interval"] = json!(-1.0)),
         "output.snapshot_interval",
         "positive",
     );
-    assert_error(&rejected_json(|v| v["output"]["filter_window"] = json!(0.0)), "output.filter_window", "positive");
+    assert_error(
+        &rejected_json(|v| v["output"]["filter_window"] = json!(0.0)),
+        "output.filter_window",
+        "positive",
+    );
 }
 
 #[test]
@@ -321,8 +437,16 @@ fn duplicate_names() {
 
 #[test]
 fn empty_or_csv_breaking_names() {
-    assert_error(&rejected_json(|v| v["walls"][0]["name"] = json!(" ")), "walls[0].name", "empty");
-    assert_error(&rejected_json(|v| v["bodies"][0]["name"] = json!("a,b")), "bodies[0].name", "commas");
+    assert_error(
+        &rejected_json(|v| v["walls"][0]["name"] = json!(" ")),
+        "walls[0].name",
+        "empty",
+    );
+    assert_error(
+        &rejected_json(|v| v["bodies"][0]["name"] = json!("a,b")),
+        "bodies[0].name",
+        "commas",
+    );
 }
 
 #[test]
@@ -331,7 +455,10 @@ fn unknown_scheme_name_lists_the_valid_ones() {
     v["scheme"]["laplacian"] = json!("higher_ordr");
     let e = parse_case_value(v).expect_err("unknown variant");
     assert_error(&e, "scheme.laplacian", "higher_order");
-    assert!(e.message.contains("higher_ordr") && e.message.contains("classic"), "{e:?}");
+    assert!(
+        e.message.contains("higher_ordr") && e.message.contains("classic"),
+        "{e:?}"
+    );
 }
 
 #[test]
@@ -363,8 +490,13 @@ fn negative_stabiliser_settings() {
 fn number_pointers(v: &Value, here: String, out: &mut Vec<String>) {
     match v {
         Value::Number(_) => out.push(here),
-        Value::Array(items) => items.iter().enumerate().for_each(|(i, x)| number_pointers(x, format!("{here}/{i}"), out)),
-        Value::Object(map) => map.iter().for_each(|(k, x)| number_pointers(x, format!("{here}/{k}"), out)),
+        Value::Array(items) => items
+            .iter()
+            .enumerate()
+            .for_each(|(i, x)| number_pointers(x, format!("{here}/{i}"), out)),
+        Value::Object(map) => map
+            .iter()
+            .for_each(|(k, x)| number_pointers(x, format!("{here}/{k}"), out)),
         _ => {}
     }
 }
@@ -376,7 +508,9 @@ fn random_bad_numbers_are_rejected_or_built_without_panics() {
     let mut pointers = Vec::new();
     number_pointers(&base_value(), String::new(), &mut pointers);
     let nasty = [0.0, -1.0, 1.0e300, -1.0e300, 1.0e-300, 0.5, 2.0, 1.0e6];
-    let limits = Limits { max_particles: 20_000 };
+    let limits = Limits {
+        max_particles: 20_000,
+    };
     let (mut accepted, mut rejected_count) = (0, 0);
     for _ in 0..400 {
         let mut v = base_value();
@@ -384,13 +518,18 @@ fn random_bad_numbers_are_rejected_or_built_without_panics() {
             let p = &pointers[rng.random_range(0..pointers.len())];
             *v.pointer_mut(p).unwrap() = json!(nasty[rng.random_range(0..nasty.len())]);
         }
-        let Ok(case) = parse_case_value(v) else { continue };
+        let Ok(case) = parse_case_value(v) else {
+            continue;
+        };
         match validate(&case, &limits) {
             Ok(()) => {
                 accepted += 1;
                 let params = mpsfsi::engine::params::MpsParameters::new(&case);
                 let scene = mpsfsi::engine::scene::build_scene(&case, &params);
-                assert!(scene.particles.len() <= limits.max_particles, "the estimate bounds the scene");
+                assert!(
+                    scene.particles.len() <= limits.max_particles,
+                    "the estimate bounds the scene"
+                );
             }
             Err(e) => {
                 rejected_count += 1;
@@ -398,7 +537,10 @@ fn random_bad_numbers_are_rejected_or_built_without_panics() {
             }
         }
     }
-    assert!(accepted > 0 && rejected_count > 0, "accepted {accepted}, rejected {rejected_count}");
+    assert!(
+        accepted > 0 && rejected_count > 0,
+        "accepted {accepted}, rejected {rejected_count}"
+    );
 }
 
 #[test]
@@ -422,5 +564,6 @@ fn design_example_case_is_valid() {
       "output": { "load_interval": 1.0e-5, "snapshot_interval": null, "probes": [ { "name": "p1", "position": [0.0, -0.3] } ] },
       "scheme": { }
     });
-    validate(&parse_case_value(v).unwrap(), &Limits::default()).expect("the DESIGN.md example is valid");
+    validate(&parse_case_value(v).unwrap(), &Limits::default())
+        .expect("the DESIGN.md example is valid");
 }

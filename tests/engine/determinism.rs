@@ -17,10 +17,16 @@ const CASE: &str = r#"{
 fn run_with_threads(threads: usize, tag: &str) -> (Vec<u8>, Vec<u8>) {
     let case = parse_case_str(CASE).unwrap();
     let dir = std::env::temp_dir().join(format!("mpsfsi-determinism-{}-{tag}", std::process::id()));
-    let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build().unwrap();
+    let pool = rayon::ThreadPoolBuilder::new()
+        .num_threads(threads)
+        .build()
+        .unwrap();
     let summary = pool.install(|| run_case(&case, &dir, &mut Quiet)).unwrap();
     assert_eq!(summary.status, RunStatus::Succeeded, "{:?}", summary.reason);
-    let out = (std::fs::read(dir.join("loads.csv")).unwrap(), std::fs::read(dir.join("probes.csv")).unwrap());
+    let out = (
+        std::fs::read(dir.join("loads.csv")).unwrap(),
+        std::fs::read(dir.join("probes.csv")).unwrap(),
+    );
     std::fs::remove_dir_all(&dir).ok();
     out
 }

@@ -16,11 +16,22 @@ fn check<K: Kernel>(name: &str) {
         prev = w;
         let h = 1e-6;
         let fd1 = (K::w(r + h, re) - K::w(r - h, re)) / (2.0 * h);
-        assert!((fd1 - K::dw(r, re)).abs() <= 1e-5 * (1.0 + fd1.abs()), "{name}: w'({r}) {} vs finite difference {fd1}", K::dw(r, re));
+        assert!(
+            (fd1 - K::dw(r, re)).abs() <= 1e-5 * (1.0 + fd1.abs()),
+            "{name}: w'({r}) {} vs finite difference {fd1}",
+            K::dw(r, re)
+        );
         let fd2 = (K::dw(r + h, re) - K::dw(r - h, re)) / (2.0 * h);
-        assert!((fd2 - K::d2w(r, re)).abs() <= 1e-4 * (1.0 + fd2.abs()), "{name}: w''({r}) {} vs {fd2}", K::d2w(r, re));
+        assert!(
+            (fd2 - K::d2w(r, re)).abs() <= 1e-4 * (1.0 + fd2.abs()),
+            "{name}: w''({r}) {} vs {fd2}",
+            K::d2w(r, re)
+        );
         let hl = K::d2w(r, re) - K::dw(r, re) / r;
-        assert!((hl - K::hl(r, re)).abs() <= 1e-9 * (1.0 + hl.abs()), "{name}: HL weight");
+        assert!(
+            (hl - K::hl(r, re)).abs() <= 1e-9 * (1.0 + hl.abs()),
+            "{name}: HL weight"
+        );
     }
 }
 

@@ -9,13 +9,17 @@ use mpsfsi::engine::operators::{gradient, laplacian, Cloud, LatticeConstants, No
 use mpsfsi::engine::params::MpsParameters;
 
 fn lattice(n: usize, l0: f64) -> Vec<Vec2> {
-    (0..n * n).map(|k| Vec2::new((k % n) as f64 * l0, (k / n) as f64 * l0)).collect()
+    (0..n * n)
+        .map(|k| Vec2::new((k % n) as f64 * l0, (k / n) as f64 * l0))
+        .collect()
 }
 
 fn interior(p: &[Vec2], l0: f64, n: usize, margin: f64) -> Vec<usize> {
     let lo = margin * l0;
     let hi = (n - 1) as f64 * l0 - margin * l0;
-    (0..p.len()).filter(|&i| p[i].x > lo && p[i].y > lo && p[i].x < hi && p[i].y < hi).collect()
+    (0..p.len())
+        .filter(|&i| p[i].x > lo && p[i].y > lo && p[i].x < hi && p[i].y < hi)
+        .collect()
 }
 
 #[test]
@@ -28,7 +32,11 @@ fn classic_gradient_of_linear_field_is_exact_in_the_interior() {
     let f: Vec<f64> = x.iter().map(|p| 3.0 * p.x - 2.0 * p.y + 1.0).collect();
     let g = gradient::<Koshizuka>(GradientKind::MinimumPressure, &cloud, norm, &f);
     for i in interior(&x, l0, n, 3.0) {
-        assert!((g[i] - Vec2::new(3.0, -2.0)).norm() < 1e-10, "particle {i}: {:?}", g[i]);
+        assert!(
+            (g[i] - Vec2::new(3.0, -2.0)).norm() < 1e-10,
+            "particle {i}: {:?}",
+            g[i]
+        );
     }
 }
 

@@ -19,7 +19,9 @@ use mpsfsi::case::LaplacianKind;
 use mpsfsi::engine::kernel::WendlandC2;
 use mpsfsi::engine::math::{Real, Vec2};
 use mpsfsi::engine::neighbors::NeighborList;
-use mpsfsi::engine::operators::{laplacian_row, Cloud, LatticeConstants, LaplacianRow, Normalisation};
+use mpsfsi::engine::operators::{
+    laplacian_row, Cloud, LaplacianRow, LatticeConstants, Normalisation,
+};
 use rayon::prelude::*;
 use std::f64::consts::PI;
 
@@ -30,7 +32,8 @@ pub fn series(x: Real, y: Real, t: Real) -> Real {
     let mut steady = 0.0;
     for n in 1..=4000 {
         let nf = n as Real;
-        let decay = (-nf * PI * y).exp() * (1.0 - (-2.0 * nf * PI * (1.0 - y)).exp()) / (1.0 - (-2.0 * nf * PI).exp());
+        let decay = (-nf * PI * y).exp() * (1.0 - (-2.0 * nf * PI * (1.0 - y)).exp())
+            / (1.0 - (-2.0 * nf * PI).exp());
         if decay < 1e-18 {
             break;
         }
@@ -46,7 +49,10 @@ pub fn series(x: Real, y: Real, t: Real) -> Real {
                 continue;
             }
             let sign = if n % 2 == 1 { 1.0 } else { -1.0 };
-            transient += 4.0 * mf * sign / (nf * PI * PI * (nf * nf + mf * mf)) * (nf * PI * x).sin() * (mf * PI * y).sin() * e;
+            transient += 4.0 * mf * sign / (nf * PI * PI * (nf * nf + mf * mf))
+                * (nf * PI * x).sin()
+                * (mf * PI * y).sin()
+                * e;
         }
     }
     steady - transient
@@ -73,17 +79,27 @@ fn rmse(kind: LaplacianKind, per_side: usize) -> Real {
     let nb = NeighborList::build(&pos, re);
     let cloud = Cloud::new(&pos, &nb, re);
     let norm = Normalisation::Reference(LatticeConstants::compute::<WendlandC2>(d, re, 2));
-    let rows: Vec<LaplacianRow> = interior.iter().map(|&i| laplacian_row::<WendlandC2>(kind, &cloud, norm, i)).collect();
+    let rows: Vec<LaplacianRow> = interior
+        .iter()
+        .map(|&i| laplacian_row::<WendlandC2>(kind, &cloud, norm, i))
+        .collect();
     let max_diag = rows.iter().map(|r| r.diagonal.abs()).fold(0.0, Real::max);
     let steps = (T_END * max_diag / 0.2).ceil() as usize;
     let dt = T_END / steps as Real;
     for _ in 0..steps {
-        let rates: Vec<Real> = interior.par_iter().zip(&rows).map(|(&i, row)| row.apply(i, &phi)).collect();
+        let rates: Vec<Real> = interior
+            .par_iter()
+            .zip(&rows)
+            .map(|(&i, row)| row.apply(i, &phi))
+            .collect();
         for (&i, r) in interior.iter().zip(&rates) {
             phi[i] += dt * r;
         }
     }
-    let sq: Real = interior.iter().map(|&i| (phi[i] - series(pos[i].x, pos[i].y, T_END)).powi(2)).sum();
+    let sq: Real = interior
+        .iter()
+        .map(|&i| (phi[i] - series(pos[i].x, pos[i].y, T_END)).powi(2))
+        .sum();
     (sq / interior.len() as Real).sqrt()
 }
 
@@ -91,7 +107,11 @@ fn rmse(kind: LaplacianKind, per_side: usize) -> Real {
 fn series_reference_is_zero_initially_and_laplace_at_late_times() {
     // the re-derived reference must satisfy its own initial and boundary conditions
     // (the double series converges slowly at t = 0; φ_s(0.5, 0.5) ≈ 0.13 for scale)
-    assert!(series(0.5, 0.5, 0.0).abs() < 5e-3, "initial interior value {}", series(0.5, 0.5, 0.0));
+    assert!(
+        series(0.5, 0.5, 0.0).abs() < 5e-3,
+        "initial interior value {}",
+        series(0.5, 0.5, 0.0)
+    );
     assert!((series(0.3, 0.0, 0.1) - 0.3).abs() < 2e-3);
     assert!(series(0.3, 1.0, 0.1).abs() < 1e-9 && series(1.0, 0.4, 0.1).abs() < 1e-9);
 }
@@ -106,8 +126,14 @@ fn chl_is_more_accurate_than_hl_and_both_within_one_percent_at_fine_resolution()
         table.push((per_side, hl, chl));
     }
     for &(per_side, hl, chl) in &table {
-        assert!(chl < hl, "L/D = {per_side}: CHL RMSE {chl:.4e} not below HL {hl:.4e}");
+        assert!(
+            chl < hl,
+            "L/D = {per_side}: CHL RMSE {chl:.4e} not below HL {hl:.4e}"
+        );
     }
     let (_, hl, chl) = table[1];
-    assert!(hl < 0.01 && chl < 0.01, "L/D = 100: RMSE HL {hl:.4e}, CHL {chl:.4e} (want < 1 %)");
+    assert!(
+        hl < 0.01 && chl < 0.01,
+        "L/D = 100: RMSE HL {hl:.4e}, CHL {chl:.4e} (want < 1 %)"
+    );
 }

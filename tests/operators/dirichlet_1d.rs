@@ -61,7 +61,12 @@ impl Problem {
 
 /// Dense-ish linear system in CSR from (row -> [(col, value)]).
 pub fn csr_from_rows(rows: &[Vec<(usize, Real)>]) -> CsrMatrix {
-    let mut m = CsrMatrix { n: rows.len(), row_ptr: vec![0], col: Vec::new(), val: Vec::new() };
+    let mut m = CsrMatrix {
+        n: rows.len(),
+        row_ptr: vec![0],
+        col: Vec::new(),
+        val: Vec::new(),
+    };
     for row in rows {
         let mut r = row.clone();
         r.sort_by_key(|&(c, _)| c);
@@ -84,7 +89,17 @@ pub fn csr_from_rows(rows: &[Vec<(usize, Real)>]) -> CsrMatrix {
 pub fn solve_direct(rows: &[Vec<(usize, Real)>], b: &[Real]) -> Vec<Real> {
     let a = csr_from_rows(rows);
     let mut x = vec![0.0; b.len()];
-    solve(SolverKind::Direct, &a, b, &mut x, SolveParams { tolerance: 1e-12, max_iterations: 1 }).expect("direct solve");
+    solve(
+        SolverKind::Direct,
+        &a,
+        b,
+        &mut x,
+        SolveParams {
+            tolerance: 1e-12,
+            max_iterations: 1,
+        },
+    )
+    .expect("direct solve");
     x
 }
 
@@ -93,20 +108,34 @@ pub fn solve_direct(rows: &[Vec<(usize, Real)>], b: &[Real]) -> Vec<Real> {
 fn classic_error(problem: Problem, ratio: usize) -> Real {
     let dx = H / ratio as Real;
     let n = ratio * 10; // particles 0..=n on [0, 1]
-    let dummies = if problem == Problem::ConstantSourceMixed { ratio } else { 0 };
+    let dummies = if problem == Problem::ConstantSourceMixed {
+        ratio
+    } else {
+        0
+    };
     // positions: real particles first, then dummies at -k dx
     let mut pos: Vec<Vec2> = (0..=n).map(|k| Vec2::new(k as Real * dx, 0.0)).collect();
     pos.extend((1..=dummies).map(|k| Vec2::new(-(k as Real) * dx, 0.0)));
     let nb = NeighborList::build(&pos, H);
     let cloud = Cloud::one_dimensional(&pos, &nb, H);
     let consts = LatticeConstants::compute::<Koshizuka>(dx, H, 1);
-    let first_unknown = if problem == Problem::ConstantSourceMixed { 0 } else { 1 };
+    let first_unknown = if problem == Problem::ConstantSourceMixed {
+        0
+    } else {
+        1
+    };
     let unknowns: Vec<usize> = (first_unknown..n).collect(); // particle k -> unknown k - first
-    let index = |k: usize| -> Option<usize> { (k >= first_unknown && k < n).then(|| k - first_unknown) };
+    let index =
+        |k: usize| -> Option<usize> { (k >= first_unknown && k < n).then(|| k - first_unknown) };
     let mut rows = Vec::new();
     let mut b = Vec::new();
     for &i in &unknowns {
-        let row = laplacian_row::<Koshizuka>(LaplacianKind::Classic, &cloud, Normalisation::Reference(consts), i);
+        let row = laplacian_row::<Koshizuka>(
+            LaplacianKind::Classic,
+            &cloud,
+            Normalisation::Reference(consts),
+            i,
+        );
         let mut r = vec![(index(i).unwrap(), row.diagonal)];
         let mut rhs = problem.source();
         for &(j, c) in &row.off_diagonal {
@@ -120,7 +149,11 @@ fn classic_error(problem: Problem, ratio: usize) -> Real {
         b.push(rhs);
     }
     let f = solve_direct(&rows, &b);
-    unknowns.iter().zip(&f).map(|(&k, v)| (v - problem.exact(pos[k].x)).abs()).fold(0.0, Real::max)
+    unknowns
+        .iter()
+        .zip(&f)
+        .map(|(&k, v)| (v - problem.exact(pos[k].x)).abs())
+        .fold(0.0, Real::max)
 }
 
 /// Max |f - exact| with the boundary-corrected Laplacian (module doc).
@@ -132,17 +165,32 @@ fn corrected_error(problem: Problem, ratio: usize) -> Real {
     let cloud = Cloud::one_dimensional(&pos, &nb, H);
     let consts = LatticeConstants::compute::<Koshizuka>(dx, H, 1);
     // W ∝ (h - r)², normalised so that dx Σ_{k∈Z} W(|k| dx) = 1
-    let line_sum: Real = (-(ratio as i64)..=ratio as i64).map(|k| (H - (k as Real * dx).abs()).max(0.0).powi(2)).sum();
+    let line_sum: Real = (-(ratio as i64)..=ratio as i64)
+        .map(|k| (H - (k as Real * dx).abs()).max(0.0).powi(2))
+        .sum();
     let kernel_w = |r: Real| (H - r).max(0.0).powi(2) / (dx * line_sum);
-    let first_unknown = if problem == Problem::ConstantSourceMixed { 0 } else { 1 };
-    let index = |k: usize| -> Option<usize> { (k >= first_unknown && k < n).then(|| k - first_unknown) };
+    let first_unknown = if problem == Problem::ConstantSourceMixed {
+        0
+    } else {
+        1
+    };
+    let index =
+        |k: usize| -> Option<usize> { (k >= first_unknown && k < n).then(|| k - first_unknown) };
     let boundaries = [0usize, n];
     let mut rows = Vec::new();
     let mut b = Vec::new();
     for i in first_unknown..n {
         let xi = pos[i].x;
-        let gamma: Real = dx * (0..=n).map(|j| kernel_w((pos[j].x - xi).abs())).sum::<Real>();
-        let row = laplacian_row::<Koshizuka>(LaplacianKind::Classic, &cloud, Normalisation::Reference(consts), i);
+        let gamma: Real = dx
+            * (0..=n)
+                .map(|j| kernel_w((pos[j].x - xi).abs()))
+                .sum::<Real>();
+        let row = laplacian_row::<Koshizuka>(
+            LaplacianKind::Classic,
+            &cloud,
+            Normalisation::Reference(consts),
+            i,
+        );
         let mut coeffs: Vec<(usize, Real)> = row.off_diagonal.clone();
         for &bnd in &boundaries {
             let r = (pos[bnd].x - xi).abs();
@@ -151,7 +199,10 @@ fn corrected_error(problem: Problem, ratio: usize) -> Real {
             }
             // at the Neumann end point itself the term is -2 W(0) f'_n = 0 (f'(0) = 0)
         }
-        let mut r = vec![(index(i).unwrap(), -coeffs.iter().map(|c| c.1).sum::<Real>() / gamma)];
+        let mut r = vec![(
+            index(i).unwrap(),
+            -coeffs.iter().map(|c| c.1).sum::<Real>() / gamma,
+        )];
         let mut rhs = problem.source();
         for (j, c) in coeffs {
             match index(j) {
@@ -163,28 +214,51 @@ fn corrected_error(problem: Problem, ratio: usize) -> Real {
         b.push(rhs);
     }
     let f = solve_direct(&rows, &b);
-    (first_unknown..n).zip(&f).map(|(k, v)| (v - problem.exact(pos[k].x)).abs()).fold(0.0, Real::max)
+    (first_unknown..n)
+        .zip(&f)
+        .map(|(k, v)| (v - problem.exact(pos[k].x)).abs())
+        .fold(0.0, Real::max)
 }
 
 fn check(problem: Problem, label: &str, exact_at_two: bool) {
     let classic: Vec<Real> = RATIOS.iter().map(|&k| classic_error(problem, k)).collect();
-    let corrected: Vec<Real> = RATIOS.iter().map(|&k| corrected_error(problem, k)).collect();
+    let corrected: Vec<Real> = RATIOS
+        .iter()
+        .map(|&k| corrected_error(problem, k))
+        .collect();
     println!("{label}: h/dx {RATIOS:?}\n  classic   max error {classic:.3?}\n  corrected max error {corrected:.3?}");
     // "the solution for h/dx = 2 is exact" (nearest neighbours: the centred difference)
     // (the Neumann case is not: dummies holding f_0 put the condition half a spacing
     // outside x = 0, an O(dx) error for our f = x²; the paper's exact solution of
     // §5.5.2 is not in the text copy)
-    assert!(!exact_at_two || classic[0] < 1e-10, "{label}: classic at h/dx = 2 should be exact, error {:.3e}", classic[0]);
+    assert!(
+        !exact_at_two || classic[0] < 1e-10,
+        "{label}: classic at h/dx = 2 should be exact, error {:.3e}",
+        classic[0]
+    );
     // the classic solution drifts away as neighbours grow
     for w in classic[1..].windows(2) {
-        assert!(w[1] > w[0], "{label}: classic error should grow with h/dx: {classic:.3?}");
+        assert!(
+            w[1] > w[0],
+            "{label}: classic error should grow with h/dx: {classic:.3?}"
+        );
     }
-    assert!(*classic.last().unwrap() > 0.05, "{label}: classic solution should drift visibly: {classic:.3?}");
+    assert!(
+        *classic.last().unwrap() > 0.05,
+        "{label}: classic solution should drift visibly: {classic:.3?}"
+    );
     // the corrected formulation converges: monotone decrease, below 1 % at the finest
     for w in corrected[1..].windows(2) {
-        assert!(w[1] < w[0], "{label}: corrected error should decrease with h/dx: {corrected:.3?}");
+        assert!(
+            w[1] < w[0],
+            "{label}: corrected error should decrease with h/dx: {corrected:.3?}"
+        );
     }
-    assert!(*corrected.last().unwrap() < 0.01, "{label}: corrected error at h/dx = 64: {:.3e}", corrected.last().unwrap());
+    assert!(
+        *corrected.last().unwrap() < 0.01,
+        "{label}: corrected error at h/dx = 64: {:.3e}",
+        corrected.last().unwrap()
+    );
 }
 
 #[test]

@@ -37,7 +37,11 @@ fn tank_case() -> mpsfsi::case::Case {
 
 /// Mean relative deviation from ρ g (H - y) over the particles in the lower half, after
 /// `end` seconds; and the largest speed.
-fn run(gradient: GradientKind, laplacian: LaplacianKind, solver: SolverKind) -> Result<(f64, f64, usize), String> {
+fn run(
+    gradient: GradientKind,
+    laplacian: LaplacianKind,
+    solver: SolverKind,
+) -> Result<(f64, f64, usize), String> {
     let mut case = tank_case();
     case.scheme.gradient = gradient;
     case.scheme.laplacian = laplacian;
@@ -46,7 +50,8 @@ fn run(gradient: GradientKind, laplacian: LaplacianKind, solver: SolverKind) -> 
     let start = sim.particle_count();
     while sim.time < case.time.end {
         let dt = sim.next_dt();
-        sim.step(dt).map_err(|e| format!("{gradient:?}/{laplacian:?}/{solver:?} failed: {e}"))?;
+        sim.step(dt)
+            .map_err(|e| format!("{gradient:?}/{laplacian:?}/{solver:?} failed: {e}"))?;
     }
     let rho_g = 1000.0 * 9.81;
     let (mut dev, mut count) = (0.0, 0);
@@ -57,7 +62,11 @@ fn run(gradient: GradientKind, laplacian: LaplacianKind, solver: SolverKind) -> 
             count += 1;
         }
     }
-    Ok((dev / count as f64, sim.max_particle_speed(), start - sim.particle_count()))
+    Ok((
+        dev / count as f64,
+        sim.max_particle_speed(),
+        start - sim.particle_count(),
+    ))
 }
 
 #[test]
@@ -90,12 +99,21 @@ fn hydrostatic_tank_runs_with_each_operator_variant() {
         };
         println!("{g:?} / {l:?} / {s:?}: mean |p - ρg(H-y)|/ρg(H-y) = {dev:.3}, max speed {speed:.3} m/s, lost {lost}");
         assert_eq!(lost, 0, "{g:?}/{l:?}: particles left the domain");
-        assert!(speed.is_finite() && dev.is_finite(), "{g:?}/{l:?}: non-finite state");
+        assert!(
+            speed.is_finite() && dev.is_finite(),
+            "{g:?}/{l:?}: non-finite state"
+        );
         // the still tank is hydrostatic (Pascal's law) except for the known failures
         let known_failure = g == G::Cmps || (g, l) == (G::LeastSquares, L::HigherOrder);
         if !known_failure {
-            assert!(dev < 0.03, "{g:?}/{l:?}/{s:?}: mean deviation {dev:.3} from ρ g (H - y)");
-            assert!(speed < 0.1, "{g:?}/{l:?}/{s:?}: still water moving at {speed:.3} m/s");
+            assert!(
+                dev < 0.03,
+                "{g:?}/{l:?}/{s:?}: mean deviation {dev:.3} from ρ g (H - y)"
+            );
+            assert!(
+                speed < 0.1,
+                "{g:?}/{l:?}/{s:?}: still water moving at {speed:.3} m/s"
+            );
         }
     }
     assert!(failures.is_empty(), "{failures:#?}");

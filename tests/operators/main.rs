@@ -3,8 +3,8 @@
 
 mod convergence;
 mod diffusion;
-mod engine_variants;
 mod dirichlet_1d;
+mod engine_variants;
 mod manufactured_ppe;
 mod rows;
 mod spacing_1d;

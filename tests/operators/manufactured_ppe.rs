@@ -71,7 +71,11 @@ fn solution_error(kind: LaplacianKind, per_side: usize) -> Real {
     }
     let p = solve_direct(&rows, &b);
     let max_p = 3.0_f64.sin().abs().max(1.0) + 1.0; // |p| ≤ 2 on the square
-    let sq: Real = unknowns.iter().zip(&p).map(|(&i, v)| (v - exact(pos[i])).powi(2)).sum();
+    let sq: Real = unknowns
+        .iter()
+        .zip(&p)
+        .map(|(&i, v)| (v - exact(pos[i])).powi(2))
+        .sum();
     (sq / unknowns.len() as Real).sqrt() / max_p
 }
 
@@ -93,27 +97,57 @@ fn each_laplacian_solves_the_manufactured_ppe_on_a_disordered_cloud() {
     println!("manufactured PPE on a jittered cloud (±0.25 dx), relative RMS error of p:");
     let mut results = Vec::new();
     for kind in kinds {
-        let errs: Vec<(Real, Real)> = sides.iter().map(|&s| (1.0 / s as Real, solution_error(kind, s))).collect();
+        let errs: Vec<(Real, Real)> = sides
+            .iter()
+            .map(|&s| (1.0 / s as Real, solution_error(kind, s)))
+            .collect();
         let order = slope(&errs);
-        println!("  {kind:?}: {:?} order {order:.2}", errs.iter().map(|e| format!("{:.3e}", e.1)).collect::<Vec<_>>());
+        println!(
+            "  {kind:?}: {:?} order {order:.2}",
+            errs.iter()
+                .map(|e| format!("{:.3e}", e.1))
+                .collect::<Vec<_>>()
+        );
         results.push((kind, errs, order));
     }
     let get = |k: LaplacianKind| results.iter().find(|r| r.0 == k).unwrap();
     let (_, ls, ls_order) = get(LaplacianKind::LeastSquares);
     // second-order basis: truncation O(dx) on a disordered cloud, the solution error
     // (smoothed by the inverse operator) close to O(dx²); ask for more than first order
-    assert!(*ls_order >= 1.5, "least squares: solution order {ls_order:.2} below 1.5");
-    assert!(ls[2].1 < 1e-3, "least squares: error {:.3e} at dx = 1/64", ls[2].1);
+    assert!(
+        *ls_order >= 1.5,
+        "least squares: solution order {ls_order:.2} below 1.5"
+    );
+    assert!(
+        ls[2].1 < 1e-3,
+        "least squares: error {:.3e} at dx = 1/64",
+        ls[2].1
+    );
     for r in &results {
-        assert!(r.1.iter().all(|e| e.1.is_finite()), "{:?}: non-finite solution", r.0);
+        assert!(
+            r.1.iter().all(|e| e.1.is_finite()),
+            "{:?}: non-finite solution",
+            r.0
+        );
         // every variant's solution improves with resolution on this cloud (the truncation
         // errors of the non-consistent ones oscillate and largely cancel in the solve)
-        assert!(r.1.windows(2).all(|w| w[1].1 < w[0].1), "{:?}: error not decreasing {:?}", r.0, r.1);
+        assert!(
+            r.1.windows(2).all(|w| w[1].1 < w[0].1),
+            "{:?}: error not decreasing {:?}",
+            r.0,
+            r.1
+        );
     }
     // CHL corrects HL's first-order inconsistency: its solution beats the classic one at every dx
     let (_, chl, _) = get(LaplacianKind::CorrectedHigherOrder);
     let (_, classic, _) = get(LaplacianKind::Classic);
     for (c, k) in chl.iter().zip(classic) {
-        assert!(c.1 < k.1, "CHL error {:.3e} not below classic {:.3e} at dx {}", c.1, k.1, c.0);
+        assert!(
+            c.1 < k.1,
+            "CHL error {:.3e} not below classic {:.3e} at dx {}",
+            c.1,
+            k.1,
+            c.0
+        );
     }
 }

@@ -66,20 +66,37 @@ fn errors(mesh: Mesh) -> (Real, Real) {
     }
     let first = dx[0];
     let last = *dx.last().unwrap();
-    let mut all: Vec<Real> = (1..=EXTENSION).rev().map(|k| -(k as Real) * first).collect();
+    let mut all: Vec<Real> = (1..=EXTENSION)
+        .rev()
+        .map(|k| -(k as Real) * first)
+        .collect();
     all.extend(&xs);
     all.extend((1..=EXTENSION).map(|k| L + k as Real * last));
     let pos: Vec<Vec2> = all.iter().map(|&x| Vec2::new(x, 0.0)).collect();
-    let spacing_at = |p: usize| -> Real { if p + 1 < all.len() { all[p + 1] - all[p] } else { all[p] - all[p - 1] } };
-    let h_max = (0..all.len()).map(|p| 2.0 * spacing_at(p)).fold(0.0, Real::max);
+    let spacing_at = |p: usize| -> Real {
+        if p + 1 < all.len() {
+            all[p + 1] - all[p]
+        } else {
+            all[p] - all[p - 1]
+        }
+    };
+    let h_max = (0..all.len())
+        .map(|p| 2.0 * spacing_at(p))
+        .fold(0.0, Real::max);
     let nb = NeighborList::build(&pos, h_max);
     let k = 2.0 * PI / L;
     let f: Vec<Real> = all.iter().map(|&x| (k * x).sin()).collect();
     let (mut eg, mut el) = (0.0 as Real, 0.0 as Real);
     for p in EXTENSION..EXTENSION + N + 1 {
         let cloud = Cloud::one_dimensional(&pos, &nb, 2.0 * spacing_at(p));
-        let g: Real = gradient_row::<Koshizuka>(GradientKind::Cmps, &cloud, Normalisation::Local, p).iter().map(|&(j, c)| c.x * (f[j] - f[p])).sum();
-        let lap = laplacian_row::<Koshizuka>(LaplacianKind::Classic, &cloud, Normalisation::Local, p).apply(p, &f);
+        let g: Real =
+            gradient_row::<Koshizuka>(GradientKind::Cmps, &cloud, Normalisation::Local, p)
+                .iter()
+                .map(|&(j, c)| c.x * (f[j] - f[p]))
+                .sum();
+        let lap =
+            laplacian_row::<Koshizuka>(LaplacianKind::Classic, &cloud, Normalisation::Local, p)
+                .apply(p, &f);
         let x = all[p];
         eg = eg.max((g - k * (k * x).cos()).abs() / k);
         el = el.max((lap + k * k * (k * x).sin()).abs() / (k * k));
@@ -89,11 +106,20 @@ fn errors(mesh: Mesh) -> (Real, Real) {
 
 #[test]
 fn mps_gradient_and_laplacian_on_the_meshes_of_table_2() {
-    let meshes = [Mesh::Regular, Mesh::Algebraic, Mesh::Geometric, Mesh::Random, Mesh::Sinusoidal];
-    let table: Vec<(Mesh, Real, Real)> = meshes.iter().map(|&m| {
-        let (g, l) = errors(m);
-        (m, g, l)
-    }).collect();
+    let meshes = [
+        Mesh::Regular,
+        Mesh::Algebraic,
+        Mesh::Geometric,
+        Mesh::Random,
+        Mesh::Sinusoidal,
+    ];
+    let table: Vec<(Mesh, Real, Real)> = meshes
+        .iter()
+        .map(|&m| {
+            let (g, l) = errors(m);
+            (m, g, l)
+        })
+        .collect();
     println!("paper 001 §6.2, max relative error of the MPS operators, sin(2πx/L), N = 40:");
     println!("| mesh | dφ/dx | d²φ/dx² |");
     for (m, g, l) in &table {
@@ -104,19 +130,41 @@ fn mps_gradient_and_laplacian_on_the_meshes_of_table_2() {
     // regular mesh: exactly the centred-difference truncation error
     let g_exact = 1.0 - kdx.sin() / kdx;
     let l_exact = 1.0 - (2.0 * (kdx / 2.0).sin() / kdx).powi(2);
-    assert!((g_reg - g_exact).abs() < 0.05 * g_exact, "regular gradient error {g_reg:.4e}, centred difference {g_exact:.4e}");
-    assert!((l_reg - l_exact).abs() < 0.05 * l_exact, "regular Laplacian error {l_reg:.4e}, centred difference {l_exact:.4e}");
+    assert!(
+        (g_reg - g_exact).abs() < 0.05 * g_exact,
+        "regular gradient error {g_reg:.4e}, centred difference {g_exact:.4e}"
+    );
+    assert!(
+        (l_reg - l_exact).abs() < 0.05 * l_exact,
+        "regular Laplacian error {l_reg:.4e}, centred difference {l_exact:.4e}"
+    );
     assert!(g_reg < 5e-3 && l_reg < 5e-3);
     let get = |m: Mesh| table.iter().find(|t| t.0 == m).unwrap();
     // Table 5: the Laplacian is bad (×) on algebraic, geometric and sinusoidal meshes,
     // good on random ones
     for m in [Mesh::Algebraic, Mesh::Geometric, Mesh::Sinusoidal] {
-        assert!(get(m).2 > 10.0 * l_reg, "{m:?}: Laplacian error {:.3e} should be far above the regular {l_reg:.3e}", get(m).2);
-        assert!(get(m).2 > 5.0 * get(Mesh::Random).2, "{m:?}: Laplacian should be worse than on the random mesh");
+        assert!(
+            get(m).2 > 10.0 * l_reg,
+            "{m:?}: Laplacian error {:.3e} should be far above the regular {l_reg:.3e}",
+            get(m).2
+        );
+        assert!(
+            get(m).2 > 5.0 * get(Mesh::Random).2,
+            "{m:?}: Laplacian should be worse than on the random mesh"
+        );
     }
     // Table 4: the gradient is bad only on the geometric mesh
     let g_geo = get(Mesh::Geometric).1;
-    for m in [Mesh::Regular, Mesh::Algebraic, Mesh::Random, Mesh::Sinusoidal] {
-        assert!(get(m).1 < g_geo, "{m:?}: gradient error {:.3e} should be below the geometric mesh's {g_geo:.3e}", get(m).1);
+    for m in [
+        Mesh::Regular,
+        Mesh::Algebraic,
+        Mesh::Random,
+        Mesh::Sinusoidal,
+    ] {
+        assert!(
+            get(m).1 < g_geo,
+            "{m:?}: gradient error {:.3e} should be below the geometric mesh's {g_geo:.3e}",
+            get(m).1
+        );
     }
 }

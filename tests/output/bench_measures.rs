@@ -1,4 +1,6 @@
-use mpsfsi::bench::measure::{fit_force_coefficient, interpolate, interval_mean_after, surge_front, surge_front_rms_error};
+use mpsfsi::bench::measure::{
+    fit_force_coefficient, interpolate, interval_mean_after, surge_front, surge_front_rms_error,
+};
 use mpsfsi::bench::reference::MARTIN_MOYCE_SURGE;
 use mpsfsi::bench::report::{pareto_front, time_to_reach};
 use mpsfsi::bench::BenchResult;
@@ -18,7 +20,10 @@ fn a_front_equal_to_martin_and_moyce_has_zero_error_and_a_10_percent_one_has_10(
 fn the_front_error_interpolates_a_densely_sampled_front() {
     // snapshots every 0.05 in T of a front that follows the table linearly
     // (the table's own points included: the reference is piecewise linear between them)
-    let mut dense: Vec<(f64, f64)> = (0..80).map(|k| 0.05 * k as f64).filter_map(|t| interpolate(&MARTIN_MOYCE_SURGE, t).map(|z| (t, z))).collect();
+    let mut dense: Vec<(f64, f64)> = (0..80)
+        .map(|k| 0.05 * k as f64)
+        .filter_map(|t| interpolate(&MARTIN_MOYCE_SURGE, t).map(|z| (t, z)))
+        .collect();
     dense.extend(MARTIN_MOYCE_SURGE);
     dense.sort_by(|a, b| a.0.total_cmp(&b.0));
     assert!(surge_front_rms_error(&dense).unwrap() < 1e-12);
@@ -58,13 +63,21 @@ fn the_force_coefficient_fit_recovers_a_linear_force() {
         .iter()
         .map(|t| {
             let mid = t - 0.5 * dt;
-            if mid < 3e-3 || mid > 12e-3 { 1e9 } else { c * rho * v.powi(3) * (mid - t0) }
+            if mid < 3e-3 || mid > 12e-3 {
+                1e9
+            } else {
+                c * rho * v.powi(3) * (mid - t0)
+            }
         })
         .collect();
-    let (fitted, fitted_t0) = fit_force_coefficient(0.0, &times, &force, (3e-3, 12e-3), rho, v).unwrap();
+    let (fitted, fitted_t0) =
+        fit_force_coefficient(0.0, &times, &force, (3e-3, 12e-3), rho, v).unwrap();
     assert!((fitted - c).abs() < 1e-9 * c, "{fitted}");
     assert!((fitted_t0 - t0).abs() < 1e-9, "{fitted_t0}");
-    assert!(fit_force_coefficient(0.0, &times, &force, (1.0, 2.0), rho, v).is_none(), "no samples in the window");
+    assert!(
+        fit_force_coefficient(0.0, &times, &force, (1.0, 2.0), rho, v).is_none(),
+        "no samples in the window"
+    );
 }
 
 #[test]
@@ -96,9 +109,18 @@ fn result(variant: &str, wall: f64, error: f64) -> BenchResult {
 
 #[test]
 fn the_pareto_front_keeps_only_undominated_runs() {
-    let rows = [result("a", 1.0, 0.10), result("b", 2.0, 0.20), result("c", 3.0, 0.03), result("d", 0.5, f64::NAN), result("e", 4.0, 0.01)];
+    let rows = [
+        result("a", 1.0, 0.10),
+        result("b", 2.0, 0.20),
+        result("c", 3.0, 0.03),
+        result("d", 0.5, f64::NAN),
+        result("e", 4.0, 0.01),
+    ];
     let refs: Vec<&BenchResult> = rows.iter().collect();
-    let front: Vec<&str> = pareto_front(&refs).into_iter().map(|i| rows[i].variant.as_str()).collect();
+    let front: Vec<&str> = pareto_front(&refs)
+        .into_iter()
+        .map(|i| rows[i].variant.as_str())
+        .collect();
     assert_eq!(front, vec!["a", "c", "e"]);
     assert_eq!(time_to_reach(&refs, 0.05).unwrap().variant, "c");
     assert!(time_to_reach(&refs, 0.001).is_none());
@@ -107,8 +129,14 @@ fn the_pareto_front_keeps_only_undominated_runs() {
 #[test]
 fn a_coarse_dam_break_runs_and_is_scored_against_martin_and_moyce() {
     let cases = mpsfsi::bench::bench_cases(true).unwrap();
-    let dam = cases.iter().find(|c| c.name == "dam_break").expect("the dam break is always benchmarked");
-    let variant = mpsfsi::bench::variants().into_iter().find(|v| v.name == "default").unwrap();
+    let dam = cases
+        .iter()
+        .find(|c| c.name == "dam_break")
+        .expect("the dam break is always benchmarked");
+    let variant = mpsfsi::bench::variants()
+        .into_iter()
+        .find(|v| v.name == "default")
+        .unwrap();
     let dir = crate::scratch_dir("bench-dam-break");
     let r = mpsfsi::bench::run_one(dam, &variant, dam.spacings[0], &dir);
     // a run that fails after covering T = 3 is still scored (status says it failed)
@@ -125,14 +153,23 @@ fn a_coarse_dam_break_runs_and_is_scored_against_martin_and_moyce() {
 fn quick_bench_writes_its_report() {
     let out_dir = crate::scratch_dir("quick-bench");
     let started = std::time::Instant::now();
-    mpsfsi::bench::run(mpsfsi::bench::BenchOptions { quick: true, operators: false, stress: false, out_dir: out_dir.clone() }).unwrap();
+    mpsfsi::bench::run(mpsfsi::bench::BenchOptions {
+        quick: true,
+        operators: false,
+        stress: false,
+        out_dir: out_dir.clone(),
+    })
+    .unwrap();
     let seconds = started.elapsed().as_secs_f64();
     eprintln!("quick bench: {seconds:.1} s");
     let results = std::fs::read_to_string(out_dir.join("results.csv")).unwrap();
     assert!(results.starts_with("case,variant,spacing,particles,steps,wall_time_s,error"));
     assert!(results.lines().count() > 1);
     assert!(out_dir.join("report.md").exists() && out_dir.join("dam_break.svg").exists());
-    assert!(seconds < 300.0, "--quick must finish in under 5 minutes: {seconds:.0} s");
+    assert!(
+        seconds < 300.0,
+        "--quick must finish in under 5 minutes: {seconds:.0} s"
+    );
 }
 
 #[test]
@@ -140,7 +177,11 @@ fn the_interpretation_is_computed_from_the_rows() {
     let mut rows = Vec::new();
     for (variant, scale, cost) in [("fast", 1.0, 1.0), ("copy", 1.0, 3.0), ("better", 0.5, 2.0)] {
         for (k, spacing) in [0.04, 0.02, 0.01].into_iter().enumerate() {
-            let mut r = result(variant, cost * 4f64.powi(k as i32), scale * 0.2 / 2f64.powi(k as i32));
+            let mut r = result(
+                variant,
+                cost * 4f64.powi(k as i32),
+                scale * 0.2 / 2f64.powi(k as i32),
+            );
             r.spacing = spacing;
             rows.push(r);
         }
@@ -150,7 +191,10 @@ fn the_interpretation_is_computed_from_the_rows() {
     assert!(text.contains("`fast`: error 20.00% at l0 = 0.0400 to 5.00% at l0 = 0.0100 (decreasing with refinement; observed order 1.00)"), "{text}");
     assert!(text.contains("`copy` gives the errors of `fast`"), "{text}");
     assert!(!text.contains("`better` gives the errors"), "{text}");
-    assert!(text.contains("Cheapest run within 5%: `better` at l0 = 0.0200, 8.00 s"), "{text}");
+    assert!(
+        text.contains("Cheapest run within 5%: `better` at l0 = 0.0200, 8.00 s"),
+        "{text}"
+    );
 }
 
 /// The CFL sweep of `--stress` on the coarse dam break (about a minute).
@@ -164,7 +208,10 @@ fn cfl_sweep_reports_every_variant() {
         let mine: Vec<_> = rows.iter().filter(|r| r.variant == v.name).collect();
         assert_eq!(mine.len(), 4, "{}", v.name);
         for r in mine {
-            eprintln!("{} cfl {} completed {} error {:.3e} {}", r.variant, r.cfl, r.completed, r.error, r.note);
+            eprintln!(
+                "{} cfl {} completed {} error {:.3e} {}",
+                r.variant, r.cfl, r.completed, r.error, r.note
+            );
             // completed means a measured front; a failure has its diagnosis
             assert!(r.completed == r.error.is_finite() || !r.note.is_empty());
         }
@@ -198,7 +245,11 @@ fn the_wedge_score_is_zero_for_the_similarity_force_and_measures_a_wrong_one() {
     let (rho, v): (f64, f64) = (1000.0, 6.15);
     // the keel starts 2 cm above the water: contact at 0.02 / V
     let contact = 0.02 / v;
-    let outcome = RunOutcome { succeeded: true, simulated_time: 0.02, particles: 1000 };
+    let outcome = RunOutcome {
+        succeeded: true,
+        simulated_time: 0.02,
+        particles: 1000,
+    };
     for (c, expected_error) in [(14.04, 0.0), (23.26, 23.26 / 14.04 - 1.0)] {
         let dir = crate::scratch_dir(&format!("wedge-score-{c}"));
         let mut text = String::from("time,body,fx,fy,mz\n");
@@ -206,12 +257,21 @@ fn the_wedge_score_is_zero_for_the_similarity_force_and_measures_a_wrong_one() {
             let t = k as f64 * 1e-4;
             let mid = t - 0.5e-4;
             // upward force on the wedge (the motion is downward), junk on the tank
-            let fy = if mid > contact { c * rho * v.powi(3) * (mid - contact) } else { 0.0 };
-            text.push_str(&format!("{t:.9e},tank,1e5,-3e5,0\n{t:.9e},wedge,0,{fy:.12e},0\n"));
+            let fy = if mid > contact {
+                c * rho * v.powi(3) * (mid - contact)
+            } else {
+                0.0
+            };
+            text.push_str(&format!(
+                "{t:.9e},tank,1e5,-3e5,0\n{t:.9e},wedge,0,{fy:.12e},0\n"
+            ));
         }
         std::fs::write(dir.join("loads.csv"), text).unwrap();
         let (error, _, _, _, note) = score(&Measure::Wedge, &case, &dir, &outcome).unwrap();
-        assert!((error - expected_error).abs() < 1e-6, "C = {c}: error {error} ({note})");
+        assert!(
+            (error - expected_error).abs() < 1e-6,
+            "C = {c}: error {error} ({note})"
+        );
     }
 }
 
@@ -232,20 +292,44 @@ fn the_hydrostatic_score_compares_the_tank_load_with_the_water_weight() {
     let particles = 5000;
     let weight = particles as f64 * 1000.0 * 1e-4 * -9.81;
     let dir = crate::scratch_dir("hydrostatic-score");
-    let (mut loads, mut probes) = (String::from("time,body,fx,fy,mz\n"), String::from("time,probe,pressure\n"));
+    let (mut loads, mut probes) = (
+        String::from("time,body,fx,fy,mz\n"),
+        String::from("time,probe,pressure\n"),
+    );
     for k in 1..=100 {
         let t = k as f64 * 0.01;
         // a start-up transient in the first half is ignored; 2% heavy and 1% low after
         let fy = if t <= 0.5 { 0.0 } else { 1.02 * weight };
         loads.push_str(&format!("{t:.9e},tank,0,{fy:.12e},0\n"));
-        probes.push_str(&format!("{t:.9e},mid_depth,{:.12e}\n", if t < 0.5 { 0.0 } else { 0.99 * 1000.0 * 9.81 * 0.25 }));
+        probes.push_str(&format!(
+            "{t:.9e},mid_depth,{:.12e}\n",
+            if t < 0.5 {
+                0.0
+            } else {
+                0.99 * 1000.0 * 9.81 * 0.25
+            }
+        ));
     }
     std::fs::write(dir.join("loads.csv"), loads).unwrap();
     std::fs::write(dir.join("probes.csv"), probes).unwrap();
-    let outcome = RunOutcome { succeeded: true, simulated_time: 1.0, particles };
-    let (load_error, _, probe_error, _, _) = score(&Measure::Hydrostatic, &case, &dir, &outcome).unwrap();
+    let outcome = RunOutcome {
+        succeeded: true,
+        simulated_time: 1.0,
+        particles,
+    };
+    let (load_error, _, probe_error, _, _) =
+        score(&Measure::Hydrostatic, &case, &dir, &outcome).unwrap();
     assert!((load_error - 0.02).abs() < 1e-9, "{load_error}");
     assert!((probe_error - 0.01).abs() < 1e-9, "{probe_error}");
-    let failed = RunOutcome { succeeded: false, ..outcome };
-    assert!(score(&Measure::Hydrostatic, &case, &dir, &failed).unwrap().0.is_nan(), "a failed tank is not scored");
+    let failed = RunOutcome {
+        succeeded: false,
+        ..outcome
+    };
+    assert!(
+        score(&Measure::Hydrostatic, &case, &dir, &failed)
+            .unwrap()
+            .0
+            .is_nan(),
+        "a failed tank is not scored"
+    );
 }

@@ -23,7 +23,9 @@ pub fn small_tank() -> serde_json::Value {
 
 /// A fresh empty directory under the target folder.
 pub fn scratch_dir(name: &str) -> std::path::PathBuf {
-    let dir = std::path::Path::new(env!("CARGO_TARGET_TMPDIR")).join("output-suite").join(name);
+    let dir = std::path::Path::new(env!("CARGO_TARGET_TMPDIR"))
+        .join("output-suite")
+        .join(name);
     let _ = std::fs::remove_dir_all(&dir);
     std::fs::create_dir_all(&dir).unwrap();
     dir

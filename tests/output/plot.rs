@@ -1,4 +1,4 @@
-use mpsfsi::output::plot::{log_log_svg, loads_svg, Series};
+use mpsfsi::output::plot::{loads_svg, log_log_svg, Series};
 
 fn loads_text(bodies: &[&str], rows: usize) -> String {
     let mut s = String::from("time,body,fx,fy,mz\n");
@@ -6,7 +6,12 @@ fn loads_text(bodies: &[&str], rows: usize) -> String {
         let t = k as f64 * 1e-3;
         for (b, name) in bodies.iter().enumerate() {
             let phase = b as f64;
-            s.push_str(&format!("{t:.9e},{name},{:.9e},{:.9e},{:.9e}\n", (40.0 * t + phase).sin(), 100.0 * t, -(t + phase).cos()));
+            s.push_str(&format!(
+                "{t:.9e},{name},{:.9e},{:.9e},{:.9e}\n",
+                (40.0 * t + phase).sin(),
+                100.0 * t,
+                -(t + phase).cos()
+            ));
         }
     }
     s
@@ -15,20 +20,25 @@ fn loads_text(bodies: &[&str], rows: usize) -> String {
 /// Points of every data-series `<polyline>` (stroke width 2; grid and axis lines are
 /// polylines of width 1) in order.
 fn polylines(svg: &str) -> Vec<usize> {
-    svg.match_indices("<polyline").filter_map(|(at, _)| {
-        let rest = &svg[at..];
-        let tag = &rest[..rest.find("/>").unwrap()];
-        if !tag.contains("stroke-width=\"2\"") {
-            return None;
-        }
-        let start = rest.find("points=\"").unwrap() + 8;
-        let end = rest[start..].find('"').unwrap() + start;
-        Some(rest[start..end].split_whitespace().count())
-    }).collect()
+    svg.match_indices("<polyline")
+        .filter_map(|(at, _)| {
+            let rest = &svg[at..];
+            let tag = &rest[..rest.find("/>").unwrap()];
+            if !tag.contains("stroke-width=\"2\"") {
+                return None;
+            }
+            let start = rest.find("points=\"").unwrap() + 8;
+            let end = rest[start..].find('"').unwrap() + start;
+            Some(rest[start..end].split_whitespace().count())
+        })
+        .collect()
 }
 
 fn assert_well_formed(svg: &str) {
-    assert!(svg.trim_start().starts_with("<svg") || svg.trim_start().starts_with("<?xml"), "starts like an SVG document");
+    assert!(
+        svg.trim_start().starts_with("<svg") || svg.trim_start().starts_with("<?xml"),
+        "starts like an SVG document"
+    );
     assert!(svg.trim_end().ends_with("</svg>"));
     assert_eq!(svg.matches("<svg").count(), 1);
     // every opened text element is closed
@@ -41,8 +51,19 @@ fn loads_svg_draws_one_polyline_per_body_and_component() {
     assert_well_formed(&svg);
     let lines = polylines(&svg);
     assert_eq!(lines.len(), 6, "3 components x 2 bodies");
-    assert!(lines.iter().all(|&n| n == 60), "each line has one point per sample: {lines:?}");
-    for label in ["time (s)", "fx (N/m)", "fy (N/m)", "mz (N·m/m)", "wedge entry", "wedge", "tank"] {
+    assert!(
+        lines.iter().all(|&n| n == 60),
+        "each line has one point per sample: {lines:?}"
+    );
+    for label in [
+        "time (s)",
+        "fx (N/m)",
+        "fy (N/m)",
+        "mz (N·m/m)",
+        "wedge entry",
+        "wedge",
+        "tank",
+    ] {
         assert!(svg.contains(label), "label {label:?} missing");
     }
 }
@@ -63,8 +84,14 @@ fn loads_svg_rejects_text_that_is_not_loads_csv() {
 #[test]
 fn log_log_svg_draws_a_line_per_series_and_skips_non_positive_points() {
     let series = vec![
-        Series { name: "classic".into(), points: vec![(0.5, 0.2), (2.0, 0.1), (8.0, 0.05)] },
-        Series { name: "default".into(), points: vec![(0.7, 0.08), (3.0, 0.0), (9.0, f64::NAN), (10.0, 0.01)] },
+        Series {
+            name: "classic".into(),
+            points: vec![(0.5, 0.2), (2.0, 0.1), (8.0, 0.05)],
+        },
+        Series {
+            name: "default".into(),
+            points: vec![(0.7, 0.08), (3.0, 0.0), (9.0, f64::NAN), (10.0, 0.01)],
+        },
     ];
     let svg = log_log_svg("dam break", "wall time (s)", "relative error", &series).unwrap();
     assert_well_formed(&svg);

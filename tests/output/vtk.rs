@@ -11,24 +11,43 @@ use rand_chacha::ChaCha8Rng;
 fn vtu_round_trips_points_and_point_data() {
     let mut rng = ChaCha8Rng::seed_from_u64(7);
     let n = 37;
-    let position: Vec<Vec2> = (0..n).map(|_| Vec2::new(rng.random_range(-1.0..1.0), rng.random_range(-1.0..1.0))).collect();
-    let velocity: Vec<Vec2> = (0..n).map(|_| Vec2::new(rng.random_range(-5.0..5.0), rng.random_range(-5.0..5.0))).collect();
+    let position: Vec<Vec2> = (0..n)
+        .map(|_| Vec2::new(rng.random_range(-1.0..1.0), rng.random_range(-1.0..1.0)))
+        .collect();
+    let velocity: Vec<Vec2> = (0..n)
+        .map(|_| Vec2::new(rng.random_range(-5.0..5.0), rng.random_range(-5.0..5.0)))
+        .collect();
     let pressure: Vec<f64> = (0..n).map(|_| rng.random_range(0.0..1e4)).collect();
     let number_density: Vec<f64> = (0..n).map(|_| rng.random_range(5.0..7.0)).collect();
     let free_surface: Vec<bool> = (0..n).map(|i| i % 3 == 0).collect();
-    let fields = VtuFields { position: &position, velocity: &velocity, pressure: &pressure, number_density: &number_density, n0: Some(6.5), free_surface: &free_surface };
+    let fields = VtuFields {
+        position: &position,
+        velocity: &velocity,
+        pressure: &pressure,
+        number_density: &number_density,
+        n0: Some(6.5),
+        free_surface: &free_surface,
+    };
     let grid = parse_vtu(&vtu_string(&fields, 0.125)).unwrap();
     assert_eq!(grid.points.len(), n);
     assert_eq!(grid.cells, n);
     assert_eq!(grid.time, Some(0.125));
     let close = |a: f64, b: f64| (a - b).abs() <= 1e-8 * (1.0 + b.abs());
     for i in 0..n {
-        assert!(close(grid.points[i][0], position[i].x) && close(grid.points[i][1], position[i].y) && grid.points[i][2] == 0.0);
+        assert!(
+            close(grid.points[i][0], position[i].x)
+                && close(grid.points[i][1], position[i].y)
+                && grid.points[i][2] == 0.0
+        );
     }
     let (components, v) = &grid.point_data["velocity"];
     assert_eq!(*components, 3);
     for i in 0..n {
-        assert!(close(v[3 * i], velocity[i].x) && close(v[3 * i + 1], velocity[i].y) && v[3 * i + 2] == 0.0);
+        assert!(
+            close(v[3 * i], velocity[i].x)
+                && close(v[3 * i + 1], velocity[i].y)
+                && v[3 * i + 2] == 0.0
+        );
     }
     let p = grid.scalar("pressure").unwrap();
     let nd = grid.scalar("number_density").unwrap();
@@ -48,12 +67,37 @@ fn the_reader_rejects_truncated_or_inconsistent_files() {
     let zeros = vec![Vec2::zeros(); 2];
     let s = vec![0.0; 2];
     let f = vec![false; 2];
-    let text = vtu_string(&VtuFields { position: &position, velocity: &zeros, pressure: &s, number_density: &s, n0: None, free_surface: &f }, 0.0);
+    let text = vtu_string(
+        &VtuFields {
+            position: &position,
+            velocity: &zeros,
+            pressure: &s,
+            number_density: &s,
+            n0: None,
+            free_surface: &f,
+        },
+        0.0,
+    );
     assert!(parse_vtu(&text).is_ok());
-    assert!(parse_vtu(&text[..text.len() / 2]).is_err(), "half a file is not a valid grid");
-    assert!(parse_vtu(&text.replace("NumberOfPoints=\"2\"", "NumberOfPoints=\"3\"")).is_err(), "counts must agree");
-    let pvd = pvd_string(&[PvdEntry { time: 0.5, file: "a.vtu".into() }]);
-    assert_eq!(parse_pvd(&pvd).unwrap(), vec![PvdEntry { time: 0.5, file: "a.vtu".into() }]);
+    assert!(
+        parse_vtu(&text[..text.len() / 2]).is_err(),
+        "half a file is not a valid grid"
+    );
+    assert!(
+        parse_vtu(&text.replace("NumberOfPoints=\"2\"", "NumberOfPoints=\"3\"")).is_err(),
+        "counts must agree"
+    );
+    let pvd = pvd_string(&[PvdEntry {
+        time: 0.5,
+        file: "a.vtu".into(),
+    }]);
+    assert_eq!(
+        parse_pvd(&pvd).unwrap(),
+        vec![PvdEntry {
+            time: 0.5,
+            file: "a.vtu".into()
+        }]
+    );
     assert!(parse_pvd(&pvd[..pvd.len() - 12]).is_err());
 }
 
@@ -62,11 +106,25 @@ fn the_collection_is_valid_after_every_snapshot() {
     let case = parse_case_value(small_tank()).unwrap();
     let mut sim = Simulation::new(&case);
     let dir = scratch_dir("pvd-every-write");
-    let mut writer = SnapshotWriter::create(&dir, Some(0.01)).unwrap().expect("an interval makes a writer");
+    let mut writer = SnapshotWriter::create(&dir, Some(0.01))
+        .unwrap()
+        .expect("an interval makes a writer");
     let pvd = dir.join("snapshots/run.pvd");
-    assert!(parse_pvd(&std::fs::read_to_string(&pvd).unwrap()).unwrap().is_empty(), "an empty but valid index at start");
+    assert!(
+        parse_pvd(&std::fs::read_to_string(&pvd).unwrap())
+            .unwrap()
+            .is_empty(),
+        "an empty but valid index at start"
+    );
     // (time, step, snapshot due?)
-    let script = [(0.0, 0, true), (0.004, 8, false), (0.0099999999999, 20, true), (0.015, 30, false), (0.0201, 40, true), (0.0201, 40, false)];
+    let script = [
+        (0.0, 0, true),
+        (0.004, 8, false),
+        (0.0099999999999, 20, true),
+        (0.015, 30, false),
+        (0.0201, 40, true),
+        (0.0201, 40, false),
+    ];
     let mut expected = 0;
     let mut last_file = String::new();
     for (time, step, due) in script {
@@ -81,10 +139,15 @@ fn the_collection_is_valid_after_every_snapshot() {
         assert_eq!(entries.len(), expected, "after t = {time}");
         let last = entries.last().unwrap();
         assert_eq!(last.file, last_file);
-        let grid = parse_vtu(&std::fs::read_to_string(dir.join("snapshots").join(&last.file)).unwrap()).unwrap();
+        let grid =
+            parse_vtu(&std::fs::read_to_string(dir.join("snapshots").join(&last.file)).unwrap())
+                .unwrap();
         assert_eq!(grid.points.len(), sim.particle_count());
     }
-    assert!(SnapshotWriter::create(&dir, None).unwrap().is_none(), "no interval, no writer");
+    assert!(
+        SnapshotWriter::create(&dir, None).unwrap().is_none(),
+        "no interval, no writer"
+    );
 }
 
 #[test]
@@ -93,12 +156,19 @@ fn a_run_writes_one_snapshot_per_interval_with_all_particles() {
     let dir = scratch_dir("run-snapshots");
     let summary = mpsfsi::run::run_case(&case, &dir, &mut mpsfsi::run::Quiet).unwrap();
     assert_eq!(summary.status, mpsfsi::run::RunStatus::Succeeded);
-    let entries = parse_pvd(&std::fs::read_to_string(dir.join("snapshots/run.pvd")).unwrap()).unwrap();
+    let entries =
+        parse_pvd(&std::fs::read_to_string(dir.join("snapshots/run.pvd")).unwrap()).unwrap();
     // t = 0, 0.01, ..., 0.05
     assert_eq!(entries.len(), 6, "{entries:?}");
     for (k, e) in entries.iter().enumerate() {
-        assert!((e.time - 0.01 * k as f64).abs() < 1e-3, "snapshot {k} at {}", e.time);
-        let grid = parse_vtu(&std::fs::read_to_string(dir.join("snapshots").join(&e.file)).unwrap()).unwrap();
+        assert!(
+            (e.time - 0.01 * k as f64).abs() < 1e-3,
+            "snapshot {k} at {}",
+            e.time
+        );
+        let grid =
+            parse_vtu(&std::fs::read_to_string(dir.join("snapshots").join(&e.file)).unwrap())
+                .unwrap();
         assert_eq!(grid.points.len(), summary.particles);
         assert_eq!(grid.scalar("pressure").unwrap().len(), summary.particles);
         assert_eq!(grid.time, Some(e.time));

@@ -13,8 +13,21 @@ use mpsfsi::engine::Simulation;
 
 /// (T, Z) of Martin & Moyce (1952), n² = 2, from references.md.
 const MARTIN_MOYCE: [(f64, f64); 15] = [
-    (0.41, 1.11), (0.84, 1.22), (1.19, 1.44), (1.43, 1.67), (1.63, 1.89), (1.83, 2.11), (1.98, 2.33), (2.20, 2.56),
-    (2.32, 2.78), (2.51, 3.00), (2.65, 3.22), (2.83, 3.44), (2.98, 3.67), (3.11, 3.89), (3.33, 4.11),
+    (0.41, 1.11),
+    (0.84, 1.22),
+    (1.19, 1.44),
+    (1.43, 1.67),
+    (1.63, 1.89),
+    (1.83, 2.11),
+    (1.98, 2.33),
+    (2.20, 2.56),
+    (2.32, 2.78),
+    (2.51, 3.00),
+    (2.65, 3.22),
+    (2.83, 3.44),
+    (2.98, 3.67),
+    (3.11, 3.89),
+    (3.33, 4.11),
 ];
 
 #[test]
@@ -27,24 +40,46 @@ fn surge_front_follows_martin_and_moyce() {
     let mut k = 0;
     while sim.time < case.time.end && k < MARTIN_MOYCE.len() {
         let dt = sim.next_dt();
-        sim.step(dt).unwrap_or_else(|e| panic!("dam break failed: {e}"));
+        sim.step(dt)
+            .unwrap_or_else(|e| panic!("dam break failed: {e}"));
         let t = sim.time * (2.0 * g / a).sqrt();
         if t >= MARTIN_MOYCE[k].0 {
-            let x = sim.particles.position.iter().map(|p| p.x).fold(0.0, f64::max);
+            let x = sim
+                .particles
+                .position
+                .iter()
+                .map(|p| p.x)
+                .fold(0.0, f64::max);
             front.push((t, x / a, MARTIN_MOYCE[k].1));
             k += 1;
         }
     }
-    let in_window: Vec<_> = front.iter().filter(|(t, _, _)| (1.0..=3.0).contains(t)).collect();
+    let in_window: Vec<_> = front
+        .iter()
+        .filter(|(t, _, _)| (1.0..=3.0).contains(t))
+        .collect();
     assert!(in_window.len() >= 10, "reached T = {:?}", front.last());
     for (t, z, z_ref) in &in_window {
         let err = z / z_ref - 1.0;
-        assert!(err.abs() < 0.25, "T = {t:.2}: Z = {z:.3} vs {z_ref} ({:+.1}%)", 100.0 * err);
+        assert!(
+            err.abs() < 0.25,
+            "T = {t:.2}: Z = {z:.3} vs {z_ref} ({:+.1}%)",
+            100.0 * err
+        );
     }
-    let at = |tt: f64| front.iter().find(|(t, _, _)| *t >= tt - 1e-9).copied().unwrap();
+    let at = |tt: f64| {
+        front
+            .iter()
+            .find(|(t, _, _)| *t >= tt - 1e-9)
+            .copied()
+            .unwrap()
+    };
     let (t0, z0, r0) = at(1.19);
     let (t1, z1, r1) = at(2.83);
     let speed = (z1 - z0) / (t1 - t0);
     let speed_ref = (r1 - r0) / (2.83 - 1.19);
-    assert!((speed / speed_ref - 1.0).abs() < 0.10, "front speed {speed:.3} vs {speed_ref:.3}");
+    assert!(
+        (speed / speed_ref - 1.0).abs() < 0.10,
+        "front speed {speed:.3} vs {speed_ref:.3}"
+    );
 }

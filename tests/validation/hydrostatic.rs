@@ -33,23 +33,37 @@ fn still_water(end: f64) {
 
     let (rho, g, l0, depth) = (1000.0, 9.81, 0.01, 0.5);
     let weight = summary.particles as f64 * rho * l0 * l0 * g;
-    assert_eq!(summary.particles_removed, 0, "no particle may leave the tank");
+    assert_eq!(
+        summary.particles_removed, 0,
+        "no particle may leave the tank"
+    );
     assert_eq!(summary.particles, 5000);
     let limit = 0.01 * (g * depth).sqrt();
-    assert!(summary.max_velocity < limit, "max speed {} m/s exceeds 1% of sqrt(gH) = {limit}", summary.max_velocity);
+    assert!(
+        summary.max_velocity < limit,
+        "max speed {} m/s exceeds 1% of sqrt(gH) = {limit}",
+        summary.max_velocity
+    );
 
     // every sample of the second half, not just the mean: no drift beyond 1%
     let loads = read_csv(&dir.join("loads.csv"));
     let fy: Vec<f64> = loads.iter().map(|r| r[3].parse().unwrap()).collect();
     for (k, f) in fy.iter().enumerate().skip(fy.len() / 2) {
         let err = (-f / weight - 1.0).abs();
-        assert!(err < 0.01, "sample {k}: load {f} N/m vs weight {weight} N/m ({:.3}%)", 100.0 * err);
+        assert!(
+            err < 0.01,
+            "sample {k}: load {f} N/m vs weight {weight} N/m ({:.3}%)",
+            100.0 * err
+        );
     }
     let probes = read_csv(&dir.join("probes.csv"));
     let p: Vec<f64> = probes.iter().map(|r| r[2].parse().unwrap()).collect();
     let expected = rho * g * depth / 2.0;
     let half = &p[p.len() / 2..];
     let mean = half.iter().sum::<f64>() / half.len() as f64;
-    assert!((mean / expected - 1.0).abs() < 0.02, "mid-depth pressure {mean} Pa vs {expected} Pa");
+    assert!(
+        (mean / expected - 1.0).abs() < 0.02,
+        "mid-depth pressure {mean} Pa vs {expected} Pa"
+    );
     std::fs::remove_dir_all(&dir).ok();
 }

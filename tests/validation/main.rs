@@ -8,12 +8,17 @@ use mpsfsi::case::{load_case_file, Case};
 use std::path::PathBuf;
 
 pub fn shipped_case(name: &str, overrides: &[&str]) -> Case {
-    let path = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("cases").join(name);
+    let path = PathBuf::from(env!("CARGO_MANIFEST_DIR"))
+        .join("cases")
+        .join(name);
     let overrides: Vec<String> = overrides.iter().map(|s| s.to_string()).collect();
     load_case_file(&path, &overrides).unwrap_or_else(|e| panic!("{name}: {e}"))
 }
 
 pub fn read_csv(path: &std::path::Path) -> Vec<Vec<String>> {
     let text = std::fs::read_to_string(path).unwrap();
-    text.lines().skip(1).map(|l| l.split(',').map(str::to_string).collect()).collect()
+    text.lines()
+        .skip(1)
+        .map(|l| l.split(',').map(str::to_string).collect())
+        .collect()
 }

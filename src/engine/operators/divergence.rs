@@ -13,9 +13,19 @@ use crate::engine::math::{Real, Vec2};
 use rayon::prelude::*;
 
 /// ⟨∇·u⟩ at every particle.
-pub fn divergence<K: Kernel>(kind: GradientKind, cloud: &Cloud, norm: Normalisation, u: &[Vec2]) -> Vec<Real> {
+pub fn divergence<K: Kernel>(
+    kind: GradientKind,
+    cloud: &Cloud,
+    norm: Normalisation,
+    u: &[Vec2],
+) -> Vec<Real> {
     (0..cloud.len())
         .into_par_iter()
-        .map(|i| gradient_row::<K>(kind, cloud, norm, i).iter().map(|&(j, g)| g.dot(&(u[j] - u[i]))).sum())
+        .map(|i| {
+            gradient_row::<K>(kind, cloud, norm, i)
+                .iter()
+                .map(|&(j, g)| g.dot(&(u[j] - u[i])))
+                .sum()
+        })
         .collect()
 }

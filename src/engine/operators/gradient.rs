@@ -40,23 +40,34 @@ fn classic_row<K: Kernel>(cloud: &Cloud, norm: Normalisation, i: usize) -> Gradi
     if n <= 0.0 {
         return Vec::new();
     }
-    cloud.pairs(i).map(|(j, r, d)| (j, r * (cloud.dim * K::w(d, cloud.re) / (d * d * n)))).collect()
+    cloud
+        .pairs(i)
+        .map(|(j, r, d)| (j, r * (cloud.dim * K::w(d, cloud.re) / (d * d * n))))
+        .collect()
 }
 
 /// The vector coefficients g_ij of particle i's gradient (the classic one for the
 /// minimum-pressure, CMPS and symmetric kinds, whose pressure shift [`gradient`] applies).
-pub fn gradient_row<K: Kernel>(kind: GradientKind, cloud: &Cloud, norm: Normalisation, i: usize) -> GradientRow {
+pub fn gradient_row<K: Kernel>(
+    kind: GradientKind,
+    cloud: &Cloud,
+    norm: Normalisation,
+    i: usize,
+) -> GradientRow {
     match kind {
-        GradientKind::MinimumPressure | GradientKind::Cmps | GradientKind::Symmetric => classic_row::<K>(cloud, norm, i),
+        GradientKind::MinimumPressure | GradientKind::Cmps | GradientKind::Symmetric => {
+            classic_row::<K>(cloud, norm, i)
+        }
         GradientKind::Corrected => {
             let mut a = moments::<K>(cloud, i).gc;
             if cloud.dim < 2.0 {
                 a[(1, 1)] = 1.0;
             }
             match a.try_inverse() {
-                Some(b) if rcond(&a) >= CORRECTED_GRADIENT_MIN_RCOND => {
-                    cloud.pairs(i).map(|(j, r, d)| (j, b * r * (K::w(d, cloud.re) / (d * d)))).collect()
-                }
+                Some(b) if rcond(&a) >= CORRECTED_GRADIENT_MIN_RCOND => cloud
+                    .pairs(i)
+                    .map(|(j, r, d)| (j, b * r * (K::w(d, cloud.re) / (d * d))))
+                    .collect(),
                 _ => classic_row::<K>(cloud, norm, i),
             }
         }
@@ -74,17 +85,29 @@ pub fn gradient_row<K: Kernel>(kind: GradientKind, cloud: &Cloud, norm: Normalis
                 .collect()
         }
         GradientKind::LeastSquares => match least_squares_fit::<K>(cloud, i) {
-            Some(fit) => fit.rows.iter().map(|&(j, c)| (j, Vec2::new(c[0], c[1]))).collect(),
+            Some(fit) => fit
+                .rows
+                .iter()
+                .map(|&(j, c)| (j, Vec2::new(c[0], c[1])))
+                .collect(),
             None => classic_row::<K>(cloud, norm, i),
         },
     }
 }
 
 /// ⟨∇f⟩ at every particle.
-pub fn gradient<K: Kernel>(kind: GradientKind, cloud: &Cloud, norm: Normalisation, f: &[Real]) -> Vec<Vec2> {
+pub fn gradient<K: Kernel>(
+    kind: GradientKind,
+    cloud: &Cloud,
+    norm: Normalisation,
+    f: &[Real],
+) -> Vec<Vec2> {
     let shifted = matches!(kind, GradientKind::MinimumPressure | GradientKind::Cmps);
     let f_min: Vec<Real> = if shifted {
-        (0..cloud.len()).into_par_iter().map(|i| cloud.pairs(i).map(|(j, _, _)| f[j]).fold(f[i], Real::min)).collect()
+        (0..cloud.len())
+            .into_par_iter()
+            .map(|i| cloud.pairs(i).map(|(j, _, _)| f[j]).fold(f[i], Real::min))
+            .collect()
     } else {
         Vec::new()
     };

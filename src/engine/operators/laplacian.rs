@@ -46,12 +46,18 @@ pub struct LaplacianRow {
 impl LaplacianRow {
     fn from_coefficients(off_diagonal: Vec<(usize, Real)>) -> Self {
         let diagonal = -off_diagonal.iter().map(|&(_, c)| c).sum::<Real>();
-        Self { diagonal, off_diagonal }
+        Self {
+            diagonal,
+            off_diagonal,
+        }
     }
 
     /// Σ_j c_ij (f_j - f_i), in neighbour order.
     pub fn apply(&self, i: usize, f: &[Real]) -> Real {
-        self.off_diagonal.iter().map(|&(j, c)| c * (f[j] - f[i])).sum::<Real>()
+        self.off_diagonal
+            .iter()
+            .map(|&(j, c)| c * (f[j] - f[i]))
+            .sum::<Real>()
     }
 }
 
@@ -67,14 +73,25 @@ fn classic<K: Kernel>(cloud: &Cloud, norm: Normalisation, i: usize) -> Vec<(usiz
         return Vec::new();
     }
     let a = 2.0 * cloud.dim / nl;
-    cloud.pairs(i).map(|(j, _, d)| (j, a * K::w(d, cloud.re))).collect()
+    cloud
+        .pairs(i)
+        .map(|(j, _, d)| (j, a * K::w(d, cloud.re)))
+        .collect()
 }
 
-fn normalised(cloud: &Cloud, reference: Option<Real>, pairs: Vec<(usize, Vec2, Real, Real)>) -> Vec<(usize, Real)> {
+fn normalised(
+    cloud: &Cloud,
+    reference: Option<Real>,
+    pairs: Vec<(usize, Vec2, Real, Real)>,
+) -> Vec<(usize, Real)> {
     // pairs: (j, r, d, L(r)); α from the reference or from Σ L r² of this row
     let a = reference.unwrap_or_else(|| {
         let s: Real = pairs.iter().map(|&(_, _, d, l)| l * d * d).sum();
-        if s != 0.0 { 2.0 * cloud.dim / s } else { 0.0 }
+        if s != 0.0 {
+            2.0 * cloud.dim / s
+        } else {
+            0.0
+        }
     });
     pairs.into_iter().map(|(j, _, _, l)| (j, a * l)).collect()
 }
@@ -84,11 +101,18 @@ fn higher_order<K: Kernel>(cloud: &Cloud, norm: Normalisation, i: usize) -> Vec<
         Normalisation::Local => None,
         Normalisation::Reference(c) => Some(c.hl_coefficient),
     };
-    let pairs = cloud.pairs(i).map(|(j, r, d)| (j, r, d, K::hl(d, cloud.re))).collect();
+    let pairs = cloud
+        .pairs(i)
+        .map(|(j, r, d)| (j, r, d, K::hl(d, cloud.re)))
+        .collect();
     normalised(cloud, reference, pairs)
 }
 
-fn corrected_higher_order<K: Kernel>(cloud: &Cloud, norm: Normalisation, i: usize) -> Vec<(usize, Real)> {
+fn corrected_higher_order<K: Kernel>(
+    cloud: &Cloud,
+    norm: Normalisation,
+    i: usize,
+) -> Vec<(usize, Real)> {
     let a = chl_moment::<K>(cloud, i);
     let c = match a.try_inverse() {
         Some(c) if rcond(&a) >= CHL_MIN_RCOND => c,
@@ -98,7 +122,10 @@ fn corrected_higher_order<K: Kernel>(cloud: &Cloud, norm: Normalisation, i: usiz
         Normalisation::Local => None,
         Normalisation::Reference(k) => Some(k.chl_coefficient),
     };
-    let pairs = cloud.pairs(i).map(|(j, r, d)| (j, r, d, chl_weight::<K>(r, d, cloud.re, &c))).collect();
+    let pairs = cloud
+        .pairs(i)
+        .map(|(j, r, d)| (j, r, d, chl_weight::<K>(r, d, cloud.re, &c)))
+        .collect();
     normalised(cloud, reference, pairs)
 }
 
@@ -120,7 +147,15 @@ fn second_order<K: Kernel>(cloud: &Cloud, norm: Normalisation, i: usize) -> Vec<
     }
     let (a, b) = (2.0 * d / den, 2.0 * d * d * theta / (nl * den));
     // Σ_k of eq. 26: Σ_k x_k² / r² = 1, and the correction term appears d times
-    cloud.pairs(i).map(|(j, r, dist)| (j, K::w(dist, cloud.re) * (a * (r.x * r.x + r.y * r.y) / (dist * dist) - d * b))).collect()
+    cloud
+        .pairs(i)
+        .map(|(j, r, dist)| {
+            (
+                j,
+                K::w(dist, cloud.re) * (a * (r.x * r.x + r.y * r.y) / (dist * dist) - d * b),
+            )
+        })
+        .collect()
 }
 
 fn anisotropic<K: Kernel>(cloud: &Cloud, norm: Normalisation, i: usize) -> Vec<(usize, Real)> {
@@ -134,7 +169,12 @@ fn anisotropic<K: Kernel>(cloud: &Cloud, norm: Normalisation, i: usize) -> Vec<(
     let s = inv.row_sum().transpose() * 2.0; // 2 [1 1] Θ⁻¹ as a column
     cloud
         .pairs(i)
-        .map(|(j, r, d)| (j, s.dot(&Vec2::new(r.x * r.x, r.y * r.y)) * K::w(d, cloud.re) / (d * d)))
+        .map(|(j, r, d)| {
+            (
+                j,
+                s.dot(&Vec2::new(r.x * r.x, r.y * r.y)) * K::w(d, cloud.re) / (d * d),
+            )
+        })
         .collect()
 }
 
@@ -169,7 +209,15 @@ pub(crate) fn least_squares_fit<K: Kernel>(cloud: &Cloud, i: usize) -> Option<Le
             .collect();
         return Some(LeastSquaresFit { rows });
     }
-    let basis = |r: Vec2| SVector::<Real, 5>::new(r.x / s, r.y / s, r.x * r.x / (2.0 * s * s), r.x * r.y / (s * s), r.y * r.y / (2.0 * s * s));
+    let basis = |r: Vec2| {
+        SVector::<Real, 5>::new(
+            r.x / s,
+            r.y / s,
+            r.x * r.x / (2.0 * s * s),
+            r.x * r.y / (s * s),
+            r.y * r.y / (2.0 * s * s),
+        )
+    };
     let mut m = SMatrix::<Real, 5, 5>::zeros();
     let mut count = 0;
     for (_, r, d) in cloud.pairs(i) {
@@ -183,7 +231,9 @@ pub(crate) fn least_squares_fit<K: Kernel>(cloud: &Cloud, i: usize) -> Option<Le
     let chol = m.cholesky()?;
     // reject nearly singular fits (a line of neighbours, a corner with few particles)
     let diag = chol.l_dirty().diagonal();
-    let (lo, hi) = diag.iter().fold((Real::MAX, 0.0 as Real), |(lo, hi), &v| (lo.min(v.abs()), hi.max(v.abs())));
+    let (lo, hi) = diag.iter().fold((Real::MAX, 0.0 as Real), |(lo, hi), &v| {
+        (lo.min(v.abs()), hi.max(v.abs()))
+    });
     if hi <= 0.0 || (lo / hi).powi(2) < 1e-10 {
         return None;
     }
@@ -192,7 +242,16 @@ pub(crate) fn least_squares_fit<K: Kernel>(cloud: &Cloud, i: usize) -> Option<Le
         .pairs(i)
         .map(|(j, r, d)| {
             let a = inv * basis(r) * K::w(d, s);
-            (j, [a[0] / s, a[1] / s, a[2] / (s * s), a[3] / (s * s), a[4] / (s * s)])
+            (
+                j,
+                [
+                    a[0] / s,
+                    a[1] / s,
+                    a[2] / (s * s),
+                    a[3] / (s * s),
+                    a[4] / (s * s),
+                ],
+            )
         })
         .collect();
     Some(LeastSquaresFit { rows })
@@ -200,13 +259,22 @@ pub(crate) fn least_squares_fit<K: Kernel>(cloud: &Cloud, i: usize) -> Option<Le
 
 fn least_squares<K: Kernel>(cloud: &Cloud, i: usize) -> Vec<(usize, Real)> {
     match least_squares_fit::<K>(cloud, i) {
-        Some(fit) => fit.rows.into_iter().map(|(j, c)| (j, c[2] + c[4])).collect(),
+        Some(fit) => fit
+            .rows
+            .into_iter()
+            .map(|(j, c)| (j, c[2] + c[4]))
+            .collect(),
         None => classic::<K>(cloud, Normalisation::Local, i),
     }
 }
 
 /// The row of particle i for the Laplacian `kind`.
-pub fn laplacian_row<K: Kernel>(kind: LaplacianKind, cloud: &Cloud, norm: Normalisation, i: usize) -> LaplacianRow {
+pub fn laplacian_row<K: Kernel>(
+    kind: LaplacianKind,
+    cloud: &Cloud,
+    norm: Normalisation,
+    i: usize,
+) -> LaplacianRow {
     let c = match kind {
         LaplacianKind::Classic => classic::<K>(cloud, norm, i),
         LaplacianKind::HigherOrder => higher_order::<K>(cloud, norm, i),
@@ -219,6 +287,14 @@ pub fn laplacian_row<K: Kernel>(kind: LaplacianKind, cloud: &Cloud, norm: Normal
 }
 
 /// ⟨∇²f⟩ at every particle.
-pub fn laplacian<K: Kernel>(kind: LaplacianKind, cloud: &Cloud, norm: Normalisation, f: &[Real]) -> Vec<Real> {
-    (0..cloud.len()).into_par_iter().map(|i| laplacian_row::<K>(kind, cloud, norm, i).apply(i, f)).collect()
+pub fn laplacian<K: Kernel>(
+    kind: LaplacianKind,
+    cloud: &Cloud,
+    norm: Normalisation,
+    f: &[Real],
+) -> Vec<Real> {
+    (0..cloud.len())
+        .into_par_iter()
+        .map(|i| laplacian_row::<K>(kind, cloud, norm, i).apply(i, f))
+        .collect()
 }

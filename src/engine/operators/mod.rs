@@ -26,7 +26,9 @@ pub use divergence::divergence;
 pub use gradient::{gradient, gradient_row, GradientRow, CORRECTED_GRADIENT_MIN_RCOND};
 pub use laplacian::{laplacian, laplacian_row, LaplacianRow};
 pub use moments::LatticeConstants;
-pub use second_derivatives::{anisotropic_second_derivatives, second_derivatives, SecondDerivatives};
+pub use second_derivatives::{
+    anisotropic_second_derivatives, second_derivatives, SecondDerivatives,
+};
 
 use super::math::{Real, Vec2};
 use super::neighbors::NeighborList;
@@ -46,11 +48,21 @@ pub struct Cloud<'a> {
 
 impl<'a> Cloud<'a> {
     pub fn new(positions: &'a [Vec2], neighbors: &'a NeighborList, re: Real) -> Self {
-        Self { positions, neighbors, re, dim: 2.0 }
+        Self {
+            positions,
+            neighbors,
+            re,
+            dim: 2.0,
+        }
     }
 
     pub fn one_dimensional(positions: &'a [Vec2], neighbors: &'a NeighborList, re: Real) -> Self {
-        Self { positions, neighbors, re, dim: 1.0 }
+        Self {
+            positions,
+            neighbors,
+            re,
+            dim: 1.0,
+        }
     }
 
     pub fn len(&self) -> usize {

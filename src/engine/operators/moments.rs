@@ -19,7 +19,11 @@ pub(crate) fn rcond(m: &Mat2) -> Real {
     let disc = ((tr * tr / 4.0) - det).max(0.0).sqrt();
     let (a, b) = ((tr / 2.0 + disc).abs(), (tr / 2.0 - disc).abs());
     let (lo, hi) = if a < b { (a, b) } else { (b, a) };
-    if hi > 0.0 { lo / hi } else { 0.0 }
+    if hi > 0.0 {
+        lo / hi
+    } else {
+        0.0
+    }
 }
 
 /// The moment sums of one neighbourhood.
@@ -103,10 +107,17 @@ impl LatticeConstants {
                 }
             }
         }
-        let inside: Vec<(Vec2, Real)> = offsets.into_iter().map(|r| (r, r.norm())).filter(|&(_, d)| d < re).collect();
+        let inside: Vec<(Vec2, Real)> = offsets
+            .into_iter()
+            .map(|r| (r, r.norm()))
+            .filter(|&(_, d)| d < re)
+            .collect();
         let n0: Real = inside.iter().map(|&(_, d)| K::w(d, re)).sum();
         let wr2: Real = inside.iter().map(|&(_, d)| K::w(d, re) * d * d).sum();
-        let theta: Real = inside.iter().map(|&(r, d)| K::w(d, re) * r.x * r.x * r.y * r.y / (d * d)).sum();
+        let theta: Real = inside
+            .iter()
+            .map(|&(r, d)| K::w(d, re) * r.x * r.x * r.y * r.y / (d * d))
+            .sum();
         let hl: Real = inside.iter().map(|&(_, d)| K::hl(d, re) * d * d).sum();
         let mut a = Mat2::zeros();
         for &(r, d) in &inside {
@@ -116,8 +127,20 @@ impl LatticeConstants {
             a[(1, 1)] = 1.0;
         }
         let c = a.try_inverse().unwrap_or_else(Mat2::identity);
-        let chl: Real = inside.iter().map(|&(r, d)| chl_weight::<K>(r, d, re, &c) * d * d).sum();
+        let chl: Real = inside
+            .iter()
+            .map(|&(r, d)| chl_weight::<K>(r, d, re, &c) * d * d)
+            .sum();
         let d = dim as Real;
-        Self { l0, re, dim: d, n0, lambda: wr2 / n0, theta, hl_coefficient: 2.0 * d / hl, chl_coefficient: 2.0 * d / chl }
+        Self {
+            l0,
+            re,
+            dim: d,
+            n0,
+            lambda: wr2 / n0,
+            theta,
+            hl_coefficient: 2.0 * d / hl,
+            chl_coefficient: 2.0 * d / chl,
+        }
     }
 }

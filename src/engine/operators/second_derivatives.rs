@@ -50,13 +50,20 @@ pub fn second_derivatives<K: Kernel>(cloud: &Cloud, f: &[Real]) -> Vec<SecondDer
             }
             let a = 2.0 * d / den;
             let b = 2.0 * d * d * theta / (nl * den);
-            SecondDerivatives { xx: a * q.x - b * plain, yy: a * q.y - b * plain, xy: mixed / theta }
+            SecondDerivatives {
+                xx: a * q.x - b * plain,
+                yy: a * q.y - b * plain,
+                xy: mixed / theta,
+            }
         })
         .collect()
 }
 
 /// Paper 000 eqs. 29-30 at every particle.
-pub fn anisotropic_second_derivatives<K: Kernel>(cloud: &Cloud, f: &[Real]) -> Vec<SecondDerivatives> {
+pub fn anisotropic_second_derivatives<K: Kernel>(
+    cloud: &Cloud,
+    f: &[Real],
+) -> Vec<SecondDerivatives> {
     (0..cloud.len())
         .into_par_iter()
         .map(|i| {
@@ -65,7 +72,11 @@ pub fn anisotropic_second_derivatives<K: Kernel>(cloud: &Cloud, f: &[Real]) -> V
             match theta.try_inverse() {
                 Some(inv) if theta[(0, 1)] > 0.0 => {
                     let v = inv * q * 2.0;
-                    SecondDerivatives { xx: v.x, yy: v.y, xy: mixed / theta[(0, 1)] }
+                    SecondDerivatives {
+                        xx: v.x,
+                        yy: v.y,
+                        xy: mixed / theta[(0, 1)],
+                    }
                 }
                 _ => SecondDerivatives::default(),
             }

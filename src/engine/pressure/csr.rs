@@ -28,13 +28,16 @@ impl CsrMatrix {
             y.iter_mut().enumerate().for_each(|(i, yi)| *yi = row(i));
             return;
         }
-        y.par_iter_mut().with_min_len(512).enumerate().for_each(|(i, yi)| {
-            let mut s = 0.0;
-            for k in self.row_ptr[i]..self.row_ptr[i + 1] {
-                s += self.val[k] * x[self.col[k] as usize];
-            }
-            *yi = s;
-        });
+        y.par_iter_mut()
+            .with_min_len(512)
+            .enumerate()
+            .for_each(|(i, yi)| {
+                let mut s = 0.0;
+                for k in self.row_ptr[i]..self.row_ptr[i + 1] {
+                    s += self.val[k] * x[self.col[k] as usize];
+                }
+                *yi = s;
+            });
     }
 
     pub fn diagonal(&self) -> Vec<Real> {
@@ -57,10 +60,15 @@ impl CsrMatrix {
         let mut triplets = Vec::with_capacity(self.nnz());
         for i in 0..self.n {
             for k in self.row_ptr[i]..self.row_ptr[i + 1] {
-                triplets.push(faer::sparse::Triplet::new(i, self.col[k] as usize, self.val[k]));
+                triplets.push(faer::sparse::Triplet::new(
+                    i,
+                    self.col[k] as usize,
+                    self.val[k],
+                ));
             }
         }
-        faer::sparse::SparseColMat::try_new_from_triplets(self.n, self.n, &triplets).map_err(|e| format!("{e:?}"))
+        faer::sparse::SparseColMat::try_new_from_triplets(self.n, self.n, &triplets)
+            .map_err(|e| format!("{e:?}"))
     }
 }
 
@@ -71,7 +79,9 @@ pub fn solve_direct(a: &CsrMatrix, b: &[Real], x: &mut [Real]) -> Result<SolveIn
         return Ok(SolveInfo::default());
     }
     let m = a.to_faer().map_err(SolveError::Factorization)?;
-    let lu = m.sp_lu().map_err(|e| SolveError::Factorization(format!("{e:?}")))?;
+    let lu = m
+        .sp_lu()
+        .map_err(|e| SolveError::Factorization(format!("{e:?}")))?;
     let rhs = faer::Mat::<Real>::from_fn(a.n, 1, |i, _| b[i]);
     let sol = lu.solve(&rhs);
     for i in 0..a.n {
@@ -79,10 +89,23 @@ pub fn solve_direct(a: &CsrMatrix, b: &[Real], x: &mut [Real]) -> Result<SolveIn
     }
     let mut r = vec![0.0; a.n];
     a.mul(x, &mut r);
-    let num: Real = r.iter().zip(b).map(|(ri, bi)| (bi - ri).powi(2)).sum::<Real>().sqrt();
-    let den: Real = b.iter().map(|v| v * v).sum::<Real>().sqrt().max(Real::MIN_POSITIVE);
+    let num: Real = r
+        .iter()
+        .zip(b)
+        .map(|(ri, bi)| (bi - ri).powi(2))
+        .sum::<Real>()
+        .sqrt();
+    let den: Real = b
+        .iter()
+        .map(|v| v * v)
+        .sum::<Real>()
+        .sqrt()
+        .max(Real::MIN_POSITIVE);
     if !num.is_finite() {
         return Err(SolveError::Breakdown);
     }
-    Ok(SolveInfo { iterations: 1, relative_residual: num / den })
+    Ok(SolveInfo {
+        iterations: 1,
+        relative_residual: num / den,
+    })
 }

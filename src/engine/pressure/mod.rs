@@ -32,7 +32,10 @@ pub struct SolveParams {
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
 pub enum SolveError {
     #[error("linear solver did not converge: relative residual {relative_residual:.3e} after {iterations} iterations")]
-    NotConverged { iterations: usize, relative_residual: Real },
+    NotConverged {
+        iterations: usize,
+        relative_residual: Real,
+    },
     #[error("linear solver broke down (non-finite value)")]
     Breakdown,
     #[error("direct factorisation failed: {0}")]
@@ -40,10 +43,18 @@ pub enum SolveError {
 }
 
 /// Solve A x = b with the chosen solver; `x` holds the initial guess on entry.
-pub fn solve(kind: SolverKind, a: &CsrMatrix, b: &[Real], x: &mut [Real], params: SolveParams) -> Result<SolveInfo, SolveError> {
+pub fn solve(
+    kind: SolverKind,
+    a: &CsrMatrix,
+    b: &[Real],
+    x: &mut [Real],
+    params: SolveParams,
+) -> Result<SolveInfo, SolveError> {
     match kind {
         SolverKind::PcgJacobi => conjugate_gradient(a, b, x, params, Preconditioner::Jacobi),
-        SolverKind::PcgIc0 => conjugate_gradient(a, b, x, params, Preconditioner::IncompleteCholesky),
+        SolverKind::PcgIc0 => {
+            conjugate_gradient(a, b, x, params, Preconditioner::IncompleteCholesky)
+        }
         SolverKind::Bicgstab => bicgstab(a, b, x, params),
         SolverKind::Direct => csr::solve_direct(a, b, x),
     }

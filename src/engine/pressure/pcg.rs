@@ -38,7 +38,10 @@ fn axpy(y: &mut [Real], alpha: Real, x: &[Real]) {
         y.iter_mut().zip(x).for_each(|(yi, xi)| *yi += alpha * xi);
         return;
     }
-    y.par_iter_mut().with_min_len(1024).zip(x.par_iter()).for_each(|(yi, xi)| *yi += alpha * xi);
+    y.par_iter_mut()
+        .with_min_len(1024)
+        .zip(x.par_iter())
+        .for_each(|(yi, xi)| *yi += alpha * xi);
 }
 
 /// Zero-fill incomplete Cholesky factor L (lower, CSR of the lower triangle incl. diagonal).
@@ -99,7 +102,12 @@ impl Ic0 {
                 }
             }
         }
-        Some(Self { n, row_ptr, col, val })
+        Some(Self {
+            n,
+            row_ptr,
+            col,
+            val,
+        })
     }
 
     /// z = (L Lᵀ)⁻¹ r
@@ -143,7 +151,11 @@ fn start(a: &CsrMatrix, b: &[Real], x: &mut [Real]) -> Option<Start> {
         x.iter_mut().for_each(|v| *v = 0.0);
         return None;
     }
-    let inv_diag = a.diagonal().iter().map(|d| if *d != 0.0 { 1.0 / d } else { 1.0 }).collect();
+    let inv_diag = a
+        .diagonal()
+        .iter()
+        .map(|d| if *d != 0.0 { 1.0 / d } else { 1.0 })
+        .collect();
     let mut r = vec![0.0; a.n];
     a.mul(x, &mut r);
     r.iter_mut().zip(b).for_each(|(ri, bi)| *ri = bi - *ri);
@@ -151,9 +163,20 @@ fn start(a: &CsrMatrix, b: &[Real], x: &mut [Real]) -> Option<Start> {
 }
 
 /// Preconditioned conjugate gradients; `x` is the initial guess.
-pub fn conjugate_gradient(a: &CsrMatrix, b: &[Real], x: &mut [Real], params: SolveParams, pre: Preconditioner) -> Result<SolveInfo, SolveError> {
+pub fn conjugate_gradient(
+    a: &CsrMatrix,
+    b: &[Real],
+    x: &mut [Real],
+    params: SolveParams,
+    pre: Preconditioner,
+) -> Result<SolveInfo, SolveError> {
     let n = a.n;
-    let Some(Start { bnorm, inv_diag, r: r0 }) = start(a, b, x) else {
+    let Some(Start {
+        bnorm,
+        inv_diag,
+        r: r0,
+    }) = start(a, b, x)
+    else {
         return Ok(SolveInfo::default());
     };
     let ic = match pre {
@@ -162,7 +185,10 @@ pub fn conjugate_gradient(a: &CsrMatrix, b: &[Real], x: &mut [Real], params: Sol
     };
     let precondition = |r: &[Real], z: &mut [Real]| match &ic {
         Some(ic) => ic.apply(r, z),
-        None => z.iter_mut().enumerate().for_each(|(i, zi)| *zi = r[i] * inv_diag[i]),
+        None => z
+            .iter_mut()
+            .enumerate()
+            .for_each(|(i, zi)| *zi = r[i] * inv_diag[i]),
     };
     let mut r = r0;
     let mut z = vec![0.0; n];
@@ -174,7 +200,10 @@ pub fn conjugate_gradient(a: &CsrMatrix, b: &[Real], x: &mut [Real], params: Sol
     let mut it = 0;
     while rel > params.tolerance {
         if it >= params.max_iterations {
-            return Err(SolveError::NotConverged { iterations: it, relative_residual: rel });
+            return Err(SolveError::NotConverged {
+                iterations: it,
+                relative_residual: rel,
+            });
         }
         a.mul(&p, &mut q);
         let pq = dot(&p, &q);
@@ -188,23 +217,42 @@ pub fn conjugate_gradient(a: &CsrMatrix, b: &[Real], x: &mut [Real], params: Sol
         let rz_new = dot(&r, &z);
         let beta = rz_new / rz;
         rz = rz_new;
-        p.iter_mut().zip(z.iter()).for_each(|(pi, zi)| *pi = zi + beta * *pi);
+        p.iter_mut()
+            .zip(z.iter())
+            .for_each(|(pi, zi)| *pi = zi + beta * *pi);
         rel = dot(&r, &r).sqrt() / bnorm;
         if !rel.is_finite() {
             return Err(SolveError::Breakdown);
         }
         it += 1;
     }
-    Ok(SolveInfo { iterations: it, relative_residual: rel })
+    Ok(SolveInfo {
+        iterations: it,
+        relative_residual: rel,
+    })
 }
 
 /// BiCGSTAB with a Jacobi preconditioner, for non-symmetric operators.
-pub fn bicgstab(a: &CsrMatrix, b: &[Real], x: &mut [Real], params: SolveParams) -> Result<SolveInfo, SolveError> {
+pub fn bicgstab(
+    a: &CsrMatrix,
+    b: &[Real],
+    x: &mut [Real],
+    params: SolveParams,
+) -> Result<SolveInfo, SolveError> {
     let n = a.n;
-    let Some(Start { bnorm, inv_diag, r: r0 }) = start(a, b, x) else {
+    let Some(Start {
+        bnorm,
+        inv_diag,
+        r: r0,
+    }) = start(a, b, x)
+    else {
         return Ok(SolveInfo::default());
     };
-    let jac = |v: &[Real], out: &mut [Real]| out.par_iter_mut().enumerate().for_each(|(i, o)| *o = v[i] * inv_diag[i]);
+    let jac = |v: &[Real], out: &mut [Real]| {
+        out.par_iter_mut()
+            .enumerate()
+            .for_each(|(i, o)| *o = v[i] * inv_diag[i])
+    };
     let mut r = r0.clone();
     let (mut rho, mut alpha, mut omega) = (1.0, 1.0, 1.0);
     let mut v = vec![0.0; n];
@@ -214,7 +262,10 @@ pub fn bicgstab(a: &CsrMatrix, b: &[Real], x: &mut [Real], params: SolveParams) 
     let mut it = 0;
     while rel > params.tolerance {
         if it >= params.max_iterations {
-            return Err(SolveError::NotConverged { iterations: it, relative_residual: rel });
+            return Err(SolveError::NotConverged {
+                iterations: it,
+                relative_residual: rel,
+            });
         }
         let rho_new = dot(&r0, &r);
         if rho_new == 0.0 || !rho_new.is_finite() {
@@ -222,17 +273,25 @@ pub fn bicgstab(a: &CsrMatrix, b: &[Real], x: &mut [Real], params: SolveParams) 
         }
         let beta = (rho_new / rho) * (alpha / omega);
         rho = rho_new;
-        p.par_iter_mut().enumerate().for_each(|(i, pi)| *pi = r[i] + beta * (*pi - omega * v[i]));
+        p.par_iter_mut()
+            .enumerate()
+            .for_each(|(i, pi)| *pi = r[i] + beta * (*pi - omega * v[i]));
         jac(&p, &mut y);
         a.mul(&y, &mut v);
         alpha = rho / dot(&r0, &v);
-        s.par_iter_mut().enumerate().for_each(|(i, si)| *si = r[i] - alpha * v[i]);
+        s.par_iter_mut()
+            .enumerate()
+            .for_each(|(i, si)| *si = r[i] - alpha * v[i]);
         jac(&s, &mut zz);
         a.mul(&zz, &mut t);
         let tt = dot(&t, &t);
         omega = if tt > 0.0 { dot(&t, &s) / tt } else { 0.0 };
-        x.par_iter_mut().enumerate().for_each(|(i, xi)| *xi += alpha * y[i] + omega * zz[i]);
-        r.par_iter_mut().enumerate().for_each(|(i, ri)| *ri = s[i] - omega * t[i]);
+        x.par_iter_mut()
+            .enumerate()
+            .for_each(|(i, xi)| *xi += alpha * y[i] + omega * zz[i]);
+        r.par_iter_mut()
+            .enumerate()
+            .for_each(|(i, ri)| *ri = s[i] - omega * t[i]);
         rel = dot(&r, &r).sqrt() / bnorm;
         if !rel.is_finite() {
             return Err(SolveError::Breakdown);
@@ -242,5 +301,8 @@ pub fn bicgstab(a: &CsrMatrix, b: &[Real], x: &mut [Real], params: SolveParams) 
             return Err(SolveError::Breakdown);
         }
     }
-    Ok(SolveInfo { iterations: it, relative_residual: rel })
+    Ok(SolveInfo {
+        iterations: it,
+        relative_residual: rel,
+    })
 }

@@ -22,7 +22,10 @@ impl WallShape {
     pub fn solid_polygon(polygon: &[Vec2]) -> Self {
         let n = polygon.len();
         let surface = (0..n).map(|k| [polygon[k], polygon[(k + 1) % n]]).collect();
-        Self { surface, loops: vec![polygon.to_vec()] }
+        Self {
+            surface,
+            loops: vec![polygon.to_vec()],
+        }
     }
 
     /// A polyline with solid on its left (`solid_left`) or right, `thickness` deep.
@@ -37,13 +40,19 @@ impl WallShape {
             let offset = offset_polyline(points, true, solid_left, thickness);
             let n = points.len();
             let surface = (0..n).map(|k| [points[k], points[(k + 1) % n]]).collect();
-            return Self { surface, loops: vec![points.to_vec(), offset] };
+            return Self {
+                surface,
+                loops: vec![points.to_vec(), offset],
+            };
         }
         let offset = offset_polyline(points, false, solid_left, thickness);
         let surface = points.windows(2).map(|w| [w[0], w[1]]).collect();
         let mut ring: Vec<Vec2> = points.to_vec();
         ring.extend(offset.iter().rev());
-        Self { surface, loops: vec![ring] }
+        Self {
+            surface,
+            loops: vec![ring],
+        }
     }
 
     /// Edges of all loops.
@@ -62,7 +71,11 @@ impl WallShape {
         let t = |p: &Vec2| rotate(*p, angle) + position;
         Self {
             surface: self.surface.iter().map(|[a, b]| [t(a), t(b)]).collect(),
-            loops: self.loops.iter().map(|l| l.iter().map(t).collect()).collect(),
+            loops: self
+                .loops
+                .iter()
+                .map(|l| l.iter().map(t).collect())
+                .collect(),
         }
     }
 }
@@ -70,7 +83,10 @@ impl WallShape {
 /// Twice-signed area / 2 (positive when counter-clockwise).
 pub fn signed_area(points: &[Vec2]) -> Real {
     let n = points.len();
-    (0..n).map(|k| cross(points[k], points[(k + 1) % n])).sum::<Real>() / 2.0
+    (0..n)
+        .map(|k| cross(points[k], points[(k + 1) % n]))
+        .sum::<Real>()
+        / 2.0
 }
 
 /// Area centroid of a simple polygon.
@@ -118,7 +134,11 @@ fn offset_polyline(points: &[Vec2], closed: bool, left: bool, thickness: Real) -
                 (normal(k - 1), normal(k))
             };
             let m = n_in + n_out;
-            let m = if m.norm() < 1e-9 { n_out } else { m.normalize() };
+            let m = if m.norm() < 1e-9 {
+                n_out
+            } else {
+                m.normalize()
+            };
             let cos_half = m.dot(&n_out).max(0.25);
             points[k] + m * (thickness / cos_half)
         })
@@ -160,7 +180,11 @@ pub fn signed_distance(p: Vec2, edges: &[[Vec2; 2]]) -> Real {
         d2 = d2.min((closest_on_segment(p, *a, *b) - p).norm_squared());
     }
     let d = d2.sqrt();
-    if inside(p, edges) { d } else { -d }
+    if inside(p, edges) {
+        d
+    } else {
+        -d
+    }
 }
 
 /// Do two segments properly intersect (share a point other than a common endpoint)?
@@ -169,5 +193,6 @@ pub fn segments_intersect(a: Vec2, b: Vec2, c: Vec2, d: Vec2) -> bool {
     let d2 = cross(b - a, d - a);
     let d3 = cross(d - c, a - c);
     let d4 = cross(d - c, b - c);
-    ((d1 > 0.0 && d2 < 0.0) || (d1 < 0.0 && d2 > 0.0)) && ((d3 > 0.0 && d4 < 0.0) || (d3 < 0.0 && d4 > 0.0))
+    ((d1 > 0.0 && d2 < 0.0) || (d1 < 0.0 && d2 > 0.0))
+        && ((d3 > 0.0 && d4 < 0.0) || (d3 < 0.0 && d4 > 0.0))
 }

@@ -91,13 +91,23 @@ impl PlacedWall {
             lo = lo.inf(a).inf(b);
             hi = hi.sup(a).sup(b);
         }
-        Self { loop_edges: shape.loop_edges(), surface: shape.surface, state, lo, hi }
+        Self {
+            loop_edges: shape.loop_edges(),
+            surface: shape.surface,
+            state,
+            lo,
+            hi,
+        }
     }
 
     /// Nearest surface point to `p` if closer than `reach`.
     #[inline]
     pub fn nearest(&self, p: Vec2, reach: Real) -> Option<(Vec2, Real)> {
-        if p.x < self.lo.x - reach || p.y < self.lo.y - reach || p.x > self.hi.x + reach || p.y > self.hi.y + reach {
+        if p.x < self.lo.x - reach
+            || p.y < self.lo.y - reach
+            || p.x > self.hi.x + reach
+            || p.y > self.hi.y + reach
+        {
             return None;
         }
         let mut best: Option<(Vec2, Real)> = None;
@@ -190,7 +200,13 @@ pub trait WallWeights: Sync {
 
 /// The virtual-lattice sums of a particle at `x` against one placed wall, given its
 /// nearest surface point `xw`.
-pub fn wall_terms(x: Vec2, xw: Vec2, wall: &PlacedWall, k: &WallKernels, weights: &dyn WallWeights) -> (WallTerms, Vec2, bool) {
+pub fn wall_terms(
+    x: Vec2,
+    xw: Vec2,
+    wall: &PlacedWall,
+    k: &WallKernels,
+    weights: &dyn WallWeights,
+) -> (WallTerms, Vec2, bool) {
     let l0 = k.l0;
     let penetrated = inside(x, &wall.loop_edges);
     let mut n = x - xw;
@@ -242,7 +258,11 @@ pub fn wall_terms(x: Vec2, xw: Vec2, wall: &PlacedWall, k: &WallKernels, weights
         }
     }
     // A penetrated particle is evaluated as if it were just outside the surface.
-    let xe = if penetrated || d < 0.05 * l0 { xw + n * (0.05 * l0) } else { x };
+    let xe = if penetrated || d < 0.05 * l0 {
+        xw + n * (0.05 * l0)
+    } else {
+        x
+    };
     let de = (xe - xw).norm();
     let t = perp(n);
     let reach = k.re.max(k.re_lap);
@@ -314,12 +334,20 @@ impl WallContacts {
     }
 
     /// Find every (particle, wall) pair within the largest kernel radius and sum its terms.
-    pub fn build(positions: &[Vec2], walls: &[PlacedWall], k: &WallKernels, weights: &dyn WallWeights) -> Self {
+    pub fn build(
+        positions: &[Vec2],
+        walls: &[PlacedWall],
+        k: &WallKernels,
+        weights: &dyn WallWeights,
+    ) -> Self {
         const CHUNK: usize = 1024;
         let n = positions.len();
         let reach = k.re.max(k.re_lap);
         if walls.is_empty() {
-            return Self { offsets: vec![0; n + 1], contacts: Vec::new() };
+            return Self {
+                offsets: vec![0; n + 1],
+                contacts: Vec::new(),
+            };
         }
         let chunks: Vec<(Vec<u32>, Vec<WallContact>)> = (0..n.div_ceil(CHUNK))
             .into_par_iter()
@@ -330,7 +358,9 @@ impl WallContacts {
                     let x = positions[i];
                     let before = out.len();
                     for (o, wall) in walls.iter().enumerate() {
-                        let Some((xw, d)) = wall.nearest(x, reach) else { continue };
+                        let Some((xw, d)) = wall.nearest(x, reach) else {
+                            continue;
+                        };
                         let (terms, normal, penetrated) = wall_terms(x, xw, wall, k, weights);
                         out.push(WallContact {
                             object: o as u32,
