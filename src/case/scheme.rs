@@ -161,6 +161,14 @@ pub struct Scheme {
     pub collision_restitution: f64,
     /// Distance from a wall below which the repulsion safety net acts (ratio of l0).
     pub wall_repulsion_distance: f64,
+    /// Particle shifting coefficient A (Fickian, Lind et al. 2012): each step moves a
+    /// particle by -A l0² ∇n/n0 (wall lattice included), tangentially only next to the
+    /// free surface; 0 disables it.
+    pub shifting: f64,
+    /// Fill the part of each Laplacian neighbourhood that is missing (free surface,
+    /// disorder) with ghosts carrying the hydrostatic pressure p_i + rho g·r, so still
+    /// water is an exact discrete solution.
+    pub hydrostatic_ghosts: bool,
     /// A run fails when a particle exceeds this speed (m/s); null: automatic from the scene.
     pub max_speed: Option<f64>,
 }
@@ -189,6 +197,8 @@ impl Default for Scheme {
             collision_distance: 0.5,
             collision_restitution: 0.2,
             wall_repulsion_distance: 0.5,
+            shifting: 0.0,
+            hydrostatic_ghosts: true,
             max_speed: None,
         }
     }

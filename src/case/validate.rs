@@ -517,6 +517,15 @@ fn check_scalars(case: &Case) -> Check {
         s.wall_repulsion_distance,
         "a ratio of particle_spacing",
     )?;
+    if !(0.0..=0.5).contains(&s.shifting) {
+        return reject(
+            "scheme.shifting",
+            format!(
+                "must lie in [0, 0.5]: a coefficient of l0² per step (got {})",
+                s.shifting
+            ),
+        );
+    }
     if let Some(v) = s.max_speed {
         positive(
             "scheme.max_speed",

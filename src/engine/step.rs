@@ -189,6 +189,9 @@ fn step<K: Kernel>(sim: &mut Simulation, dt: Real) -> Result<StepInfo, SimError>
     correct_velocity_and_position::<K>(sim, &walls, dt, &mut loads);
     sim.stage_times.correct += seconds(&mut clock);
     keep_particles_apart(sim, &walls, dt, &mut loads);
+    if sim.scheme.shifting > 0.0 {
+        shift_particles::<K>(sim);
+    }
     sim.stage_times.spacing += seconds(&mut clock);
 
     // n and ∇·u at the end of the step, for the error-compensating source
@@ -501,6 +504,8 @@ fn assemble_pressure_equation<K: Kernel>(
         }
     };
     let compress = rho * sim.scheme.compressibility / (dt * dt);
+    let rho_g = vec2(p.gravity) * rho;
+    let well_balanced = sim.scheme.hydrostatic_ghosts;
     let contacts = &sim.contacts;
     // CHL, anisotropic and least-squares rows come from engine::operators for particles
     // away from walls; rows with wall contacts keep the tabulated (HL/classic) form,
@@ -534,11 +539,17 @@ fn assemble_pressure_equation<K: Kernel>(
                 vals.push(diag);
                 return (cols, vals, b);
             }
+            // Σ L r over the neighbours present (fluid and wall lattice): zero on a full
+            // lattice, the first-order error of the Laplacian where the free surface or
+            // disorder truncates the neighbourhood
+            let mut first_moment = Vec2::zeros();
             for &j in nb.of(i) {
-                let l = c_lap * weights.laplacian((x[j as usize] - x[i]).norm());
+                let r = x[j as usize] - x[i];
+                let l = c_lap * weights.laplacian(r.norm());
                 if l == 0.0 {
                     continue;
                 }
+                first_moment += r * l;
                 diag += l;
                 let uj = unknown_of[j as usize];
                 if uj != u32::MAX {
@@ -553,6 +564,15 @@ fn assemble_pressure_equation<K: Kernel>(
             let base = contacts.offsets[i] as usize;
             for (k, c) in contacts.of(i).iter().enumerate() {
                 b += c_lap * neumann[base + k].dot(&c.terms.laplacian_moment);
+                first_moment += c.terms.laplacian_moment * c_lap;
+            }
+            // Hydrostatic consistency: the missing part of the neighbourhood (-Σ L r) is
+            // filled with ghosts carrying the hydrostatic pressure p_i + rho g·r, so a
+            // hydrostatic field solves the discrete equation whatever the arrangement.
+            // Without it the row below the free surface, which misses the point 2 l0
+            // above it, sets the whole column 1.4 l0 rho g too high and lifts the top row.
+            if well_balanced {
+                b -= rho_g.dot(&first_moment);
             }
             (cols, vals, b)
         })
@@ -820,6 +840,60 @@ fn keep_particles_apart(
                     moment_about(walls[c.object as usize].state.center_of_mass, c.point, f);
             }
         }
+    }
+}
+
+/// Fickian particle shifting (Lind et al. 2012, in MPS form): δr_i = -A l0² ∇n_i / n0,
+/// with ∇n_i = Σ_j w'(r_ij) (x_i - x_j)/r_ij plus the wall lattice's ∇Z, so particles
+/// drift from crowded to sparse places and a wall counts as filled (no shift into it).
+/// Next to the free surface (a surface particle within r_e) only the tangential part
+/// is kept: the surface deficit of n is physical, not disorder. The shift is capped at
+/// 0.1 l0 per step. Velocities are not re-interpolated: shifts are O(A l0) per step.
+fn shift_particles<K: Kernel>(sim: &mut Simulation) {
+    let (l0, re, n0) = (sim.params.l0, sim.params.re, sim.params.n0);
+    let a = sim.scheme.shifting;
+    let (x, nb, contacts, surface) = (
+        &sim.particles.position,
+        &sim.neighbors,
+        &sim.contacts,
+        &sim.particles.free_surface,
+    );
+    let shift: Vec<Vec2> = (0..x.len())
+        .into_par_iter()
+        .map(|i| {
+            let mut grad = Vec2::zeros();
+            let mut near_surface = surface[i];
+            for &j in nb.of(i) {
+                let j = j as usize;
+                let r = x[i] - x[j];
+                let d = r.norm();
+                if d >= re || d == 0.0 {
+                    continue;
+                }
+                grad += r * (K::dw(d, re) / d);
+                near_surface |= surface[j];
+            }
+            for c in contacts.of(i) {
+                grad += c.terms.number_density_gradient;
+            }
+            let mut dr = grad * (-a * l0 * l0 / n0);
+            if near_surface {
+                let g = grad.norm();
+                if g > 0.0 {
+                    let normal = grad / g;
+                    dr -= normal * dr.dot(&normal);
+                }
+            }
+            let cap = 0.1 * l0;
+            let len = dr.norm();
+            if len > cap {
+                dr *= cap / len;
+            }
+            dr
+        })
+        .collect();
+    for (xi, dr) in sim.particles.position.iter_mut().zip(shift) {
+        *xi += dr;
     }
 }
 
