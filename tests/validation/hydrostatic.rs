@@ -3,24 +3,30 @@
 //! reads rho g h within 2%, no particle leaves, and the fluid stays still (max speed
 //! below 1% of sqrt(g H)).
 //!
-//! Known defect (engine issue closing note): a mode starting where the free surface meets
-//! the side walls grows exponentially (e-folding about 0.2 s): max speed 3.0 mm/s at
-//! 0.5 s, 9.1 mm/s at 0.8 s, 23 mm/s at 1 s (limit 22 mm/s); at 2 s the load has
-//! drifted 2.5% and particles reach 0.3 m/s. The 0.8 s run passes every bound; the 2 s
-//! run the issue asks for is kept, ignored, until the mode is found.
+//! Measured with the hydrostatic ghosts of the PPE (scheme.hydrostatic_ghosts, the
+//! default): at 2 s the load is 0.07% above the weight at every sample, the probe reads
+//! 2452.8 Pa against 2452.5 Pa, and the largest speed is 2.4 mm/s (limit 22 mm/s).
+//! Without the ghosts the row below the free surface, which misses one neighbour 2 l0
+//! above it, lifted the whole column by 14 Pa; the top row rose at 0.45 mm/s, the rows
+//! below it thinned to n = 0.92 n0 and the wall corners went unstable before 2 s.
+//!
+//! Known defect, past 2 s: a checkerboard velocity mode (neighbours moving in opposite
+//! directions, mirror-symmetric) grows from the corners, e-folding about 0.25 s: max
+//! speed 1.8 mm/s at 2 s, 19 mm/s at 2.5 s, 56 mm/s at 3 s. The 20 s run of the stress
+//! suite is therefore ignored.
 
 use super::{read_csv, shipped_case};
 use mpsfsi::run::{run_case, Quiet, RunStatus};
 
 #[test]
-fn still_water_carries_its_weight_for_0_8_seconds() {
-    still_water(0.8);
+fn still_water_carries_its_weight_for_two_seconds() {
+    still_water(2.0);
 }
 
 #[test]
-#[ignore = "fails: a wall/free-surface corner mode grows (23 mm/s at 1 s, load +2.5% and 0.3 m/s at 2 s); see the module docs"]
-fn still_water_carries_its_weight_for_two_seconds() {
-    still_water(2.0);
+#[ignore = "fails: a checkerboard mode grows past 2 s (19 mm/s at 2.5 s, 56 mm/s at 3 s); see the module docs"]
+fn still_water_carries_its_weight_for_twenty_seconds() {
+    still_water(20.0);
 }
 
 fn still_water(end: f64) {
