@@ -102,6 +102,8 @@ pub enum SolverKind {
     /// on the tank (32 vs 126) and faster overall at 5k particles.
     #[default]
     PcgIc0,
+    /// Conjugate gradient with a smoothed-aggregation algebraic multigrid V-cycle.
+    PcgAmg,
     /// faer's sparse direct factorisation (Cholesky; LU when non-symmetric).
     Direct,
     /// BiCGSTAB with a Jacobi preconditioner (non-symmetric variants).
@@ -211,7 +213,10 @@ impl Scheme {
     /// reports this resolved scheme.
     pub fn resolved(mut self) -> Self {
         if !self.laplacian.is_symmetric()
-            && matches!(self.solver, SolverKind::PcgJacobi | SolverKind::PcgIc0)
+            && matches!(
+                self.solver,
+                SolverKind::PcgJacobi | SolverKind::PcgIc0 | SolverKind::PcgAmg
+            )
         {
             self.solver = SolverKind::Bicgstab;
         }
