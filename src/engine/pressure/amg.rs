@@ -13,6 +13,7 @@
 //! the number of threads.
 
 use super::CsrMatrix;
+use std::borrow::Cow;
 use crate::engine::math::Real;
 use nalgebra::{DMatrix, DVector};
 use rayon::prelude::*;
@@ -284,8 +285,9 @@ fn aggregate(a: &CsrMatrix, diag: &[Real]) -> (Vec<u32>, usize) {
     (agg, count as usize)
 }
 
-struct Level {
-    a: CsrMatrix,
+struct Level<'a> {
+    /// The operator (the caller's matrix on the finest level, not copied).
+    a: Cow<'a, CsrMatrix>,
     /// Damped Jacobi smoother: ω / a_ii.
     smoother: Vec<Real>,
     /// Prolongation (n × n_c) and restriction Pᵀ.
@@ -408,17 +410,17 @@ fn jacobi_weights(a: &CsrMatrix) -> Vec<Real> {
 }
 
 /// The multigrid hierarchy of one matrix, applied as z = M⁻¹ r.
-pub struct Amg {
-    levels: Vec<Level>,
+pub struct Amg<'a> {
+    levels: Vec<Level<'a>>,
     work: Vec<Work>,
     coarsest: Coarsest,
 }
 
-impl Amg {
+impl<'a> Amg<'a> {
     /// Build the hierarchy of a symmetric positive definite matrix.
-    pub fn new(a: &CsrMatrix) -> Self {
+    pub fn new(a: &'a CsrMatrix) -> Self {
         let mut levels = Vec::new();
-        let mut current = a.clone();
+        let mut current = Cow::Borrowed(a);
         while current.n > COARSEST && levels.len() < MAX_LEVELS {
             let diag = diagonal(&current);
             let (agg, nc) = aggregate(&current, &diag);
@@ -447,7 +449,7 @@ impl Amg {
                 .iter()
                 .map(|&d| if d > 0.0 { omega / d } else { 0.0 })
                 .collect();
-            let a_level = std::mem::replace(&mut current, coarse);
+            let a_level = std::mem::replace(&mut current, Cow::Owned(coarse));
             levels.push(Level {
                 a: a_level,
                 smoother,
@@ -463,7 +465,7 @@ impl Amg {
                 xc: vec![0.0; l.r.n],
             })
             .collect();
-        let coarsest = Coarsest::new(current);
+        let coarsest = Coarsest::new(current.into_owned());
         Self {
             levels,
             work,
@@ -503,7 +505,7 @@ impl Amg {
     }
 }
 
-fn cycle(levels: &[Level], work: &mut [Work], coarsest: &mut Coarsest, b: &[Real], x: &mut [Real]) {
+fn cycle(levels: &[Level<'_>], work: &mut [Work], coarsest: &mut Coarsest, b: &[Real], x: &mut [Real]) {
     let Some((level, rest)) = levels.split_first() else {
         coarsest.solve(b, x);
         return;
