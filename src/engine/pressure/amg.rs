@@ -433,13 +433,9 @@ impl<'a> Amg<'a> {
             let am = &current;
             let p = build_rows(current.n, nc, |i, acc| {
                 let w = if diag[i] > 0.0 { omega / diag[i] } else { 0.0 };
+                acc.add(agg[i], 1.0);
                 for k in am.row_ptr[i]..am.row_ptr[i + 1] {
-                    let j = am.col[k] as usize;
-                    let v = if j == i { 1.0 } else { 0.0 } - w * am.val[k];
-                    acc.add(agg[j], v);
-                }
-                if w == 0.0 {
-                    acc.add(agg[i], 1.0);
+                    acc.add(agg[am.col[k] as usize], -w * am.val[k]);
                 }
             });
             let r = transpose(&p, nc);
@@ -722,6 +718,26 @@ mod tests {
             cycle / spmv,
             spmv * 1e3
         );
+    }
+
+    #[test]
+    fn degenerate_matrices_diagonal_and_tiny() {
+        // no connections at all: coarsening stalls, the only level is smoothed
+        let n = 5000;
+        let diag = CsrMatrix {
+            n,
+            row_ptr: (0..=n).collect(),
+            col: (0..n as u32).collect(),
+            val: (0..n).map(|i| 1.0 + (i % 7) as Real).collect(),
+        };
+        let b: Vec<Real> = (0..n).map(|i| (i % 5) as Real - 2.0).collect();
+        let (it, x) = solve_amg(&diag, &b);
+        assert!(residual(&diag, &b, &x) < 1e-8 && it <= 2, "{it}");
+        // smaller than the coarsest level: one dense solve, one iteration
+        let a = poisson5(8);
+        let b = vec![1.0; a.n];
+        let (it, x) = solve_amg(&a, &b);
+        assert!(residual(&a, &b, &x) < 1e-8 && it <= 1, "{it}");
     }
 
     #[test]
