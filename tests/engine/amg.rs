@@ -36,8 +36,7 @@ fn run(solver: &str, spacing: f64, steps: usize, skip: usize) -> (f64, Vec<f64>,
 #[test]
 fn amg_hydrostatic_load_agrees_with_ic0_and_the_water_weight() {
     let case_solver = |s: &str| {
-        let path =
-            std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("cases/hydrostatic.json");
+        let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("cases/hydrostatic.json");
         load_case_file(&path, &[format!("scheme.solver={s}")])
             .unwrap()
             .scheme
@@ -51,7 +50,10 @@ fn amg_hydrostatic_load_agrees_with_ic0_and_the_water_weight() {
         "mean tank load: AMG {amg:.3} N, IC(0) {ic0:.3} N, weight {weight:.3} N, AMG/IC0 - 1 = {diff:.2e}"
     );
     assert!(diff < 1e-3, "AMG {amg} vs IC(0) {ic0}");
-    assert!((amg / weight - 1.0).abs() < 0.01, "AMG {amg} vs weight {weight}");
+    assert!(
+        (amg / weight - 1.0).abs() < 0.01,
+        "AMG {amg} vs weight {weight}"
+    );
 }
 
 /// 40k particles, so that the finest level and the CG vectors take the parallel paths.

@@ -13,10 +13,10 @@
 //! the number of threads.
 
 use super::CsrMatrix;
-use std::borrow::Cow;
 use crate::engine::math::Real;
 use nalgebra::{DMatrix, DVector};
 use rayon::prelude::*;
+use std::borrow::Cow;
 
 /// Levels with fewer rows run their loops on one thread.
 const PARALLEL_ROWS: usize = 8192;
@@ -365,7 +365,9 @@ impl Coarsest {
             Coarsest::Smooth { a, smoother, tmp } => {
                 for_rows(x, |i, xi| *xi = smoother[i] * b[i]);
                 for _ in 1..COARSE_SWEEPS {
-                    for_rows(tmp, |i, ti| *ti = x[i] + smoother[i] * (b[i] - row_dot(a, i, x)));
+                    for_rows(tmp, |i, ti| {
+                        *ti = x[i] + smoother[i] * (b[i] - row_dot(a, i, x))
+                    });
                     x.copy_from_slice(tmp);
                 }
             }
@@ -501,7 +503,13 @@ impl<'a> Amg<'a> {
     }
 }
 
-fn cycle(levels: &[Level<'_>], work: &mut [Work], coarsest: &mut Coarsest, b: &[Real], x: &mut [Real]) {
+fn cycle(
+    levels: &[Level<'_>],
+    work: &mut [Work],
+    coarsest: &mut Coarsest,
+    b: &[Real],
+    x: &mut [Real],
+) {
     let Some((level, rest)) = levels.split_first() else {
         coarsest.solve(b, x);
         return;
@@ -630,7 +638,12 @@ mod tests {
             for di in -reach..=reach {
                 for dj in -reach..=reach {
                     let (ii, jj) = (i + di, j + dj);
-                    if (di, dj) == (0, 0) || ii < 0 || jj < 0 || ii >= m as isize || jj >= m as isize {
+                    if (di, dj) == (0, 0)
+                        || ii < 0
+                        || jj < 0
+                        || ii >= m as isize
+                        || jj >= m as isize
+                    {
                         continue;
                     }
                     let l = (ii as usize) * m + jj as usize;
@@ -662,7 +675,9 @@ mod tests {
         let mut its = Vec::new();
         for m in [40, 100, 200] {
             let a = particle_laplacian(m, 7);
-            let b: Vec<Real> = (0..a.n).map(|i| 1.0 + ((i * 31) % 17) as Real * 0.1).collect();
+            let b: Vec<Real> = (0..a.n)
+                .map(|i| 1.0 + ((i * 31) % 17) as Real * 0.1)
+                .collect();
             let (it, x) = solve_amg(&a, &b);
             assert!(residual(&a, &b, &x) < 1e-8);
             its.push(it);
@@ -675,8 +690,18 @@ mod tests {
     /// Process CPU seconds (user + system), robust to other load on the machine.
     fn cpu_seconds() -> Real {
         let stat = std::fs::read_to_string("/proc/self/stat").unwrap_or_default();
-        let fields: Vec<&str> = stat.rsplit(')').next().unwrap_or("").split_whitespace().collect();
-        let ticks = |k: usize| fields.get(k).and_then(|v| v.parse::<Real>().ok()).unwrap_or(0.0);
+        let fields: Vec<&str> = stat
+            .rsplit(')')
+            .next()
+            .unwrap_or("")
+            .split_whitespace()
+            .collect();
+        let ticks = |k: usize| {
+            fields
+                .get(k)
+                .and_then(|v| v.parse::<Real>().ok())
+                .unwrap_or(0.0)
+        };
         (ticks(11) + ticks(12)) / 100.0
     }
 
@@ -686,7 +711,9 @@ mod tests {
     #[ignore]
     fn amg_timing() {
         let a = particle_laplacian(400, 3);
-        let b: Vec<Real> = (0..a.n).map(|i| 1.0 + ((i * 31) % 17) as Real * 0.1).collect();
+        let b: Vec<Real> = (0..a.n)
+            .map(|i| 1.0 + ((i * 31) % 17) as Real * 0.1)
+            .collect();
         let mut z = vec![0.0; a.n];
         let reps = 10;
         let t = cpu_seconds();
