@@ -106,7 +106,8 @@ pub enum SolverKind {
     /// (engine::pressure::amg), rebuilt every step. Measured on the hydrostatic tank (30
     /// steps from rest, 2 threads, loaded 2-core machine): 7, 7, 15 iterations at 10k,
     /// 40k, 160k particles; whole step 1.3x, 1.9x, 3x faster than IC(0); the setup is
-    /// about half of the solve.
+    /// about half of the solve. At 5k particles the two are level, at 1.2k IC(0) is
+    /// ahead by about 1 ms per step.
     #[default]
     PcgAmg,
     /// faer's sparse direct factorisation (Cholesky; LU when non-symmetric).
