@@ -1,6 +1,7 @@
 //! Engine suite: kernels, lattice operators, neighbour search, the polygon-wall
 //! lattice sums, and determinism. Each test compares with an exact value.
 
+mod amg;
 mod determinism;
 mod kernels;
 mod lattice;

@@ -5,14 +5,22 @@
 //! quasi-compressibility diagonal), which is symmetric positive definite for the
 //! symmetric Laplacians, so conjugate gradients apply.
 
+mod amg;
 mod csr;
 mod pcg;
 
+pub use amg::Amg;
 pub use csr::CsrMatrix;
 pub use pcg::{bicgstab, conjugate_gradient, Preconditioner};
 
 use crate::case::SolverKind;
 use crate::engine::math::Real;
+
+/// Process-wide seconds spent building preconditioners (IC(0) factor, AMG hierarchy),
+/// for benchmarks that split a solve into setup and iterations.
+pub fn preconditioner_setup_seconds() -> f64 {
+    pcg::SETUP_NANOS.load(std::sync::atomic::Ordering::Relaxed) as f64 * 1e-9
+}
 
 /// Convergence report of an iterative solve (faer style: `Params -> Result<Info, Error>`).
 #[derive(Debug, Clone, Copy, Default, PartialEq)]
@@ -55,6 +63,7 @@ pub fn solve(
         SolverKind::PcgIc0 => {
             conjugate_gradient(a, b, x, params, Preconditioner::IncompleteCholesky)
         }
+        SolverKind::PcgAmg => conjugate_gradient(a, b, x, params, Preconditioner::Amg),
         SolverKind::Bicgstab => bicgstab(a, b, x, params),
         SolverKind::Direct => csr::solve_direct(a, b, x),
     }

@@ -2,6 +2,7 @@
 //! IC(0)) for the symmetric systems, BiCGSTAB (Jacobi) for the others. Dot products
 //! use fixed-chunk reductions so iterates do not depend on the thread count.
 
+use super::amg::Amg;
 use super::{CsrMatrix, SolveError, SolveInfo, SolveParams};
 use crate::engine::math::{deterministic_sum, Real};
 use rayon::prelude::*;
@@ -10,6 +11,8 @@ use rayon::prelude::*;
 pub enum Preconditioner {
     Jacobi,
     IncompleteCholesky,
+    /// Smoothed-aggregation algebraic multigrid, one V-cycle ([`super::amg`]).
+    Amg,
 }
 
 /// Below this many unknowns vector operations run on one thread: rayon's fork/join
@@ -42,6 +45,24 @@ fn axpy(y: &mut [Real], alpha: Real, x: &[Real]) {
         .with_min_len(1024)
         .zip(x.par_iter())
         .for_each(|(yi, xi)| *yi += alpha * xi);
+}
+
+/// Total nanoseconds of preconditioner setup in this process (benchmarks only).
+pub(crate) static SETUP_NANOS: std::sync::atomic::AtomicU64 = std::sync::atomic::AtomicU64::new(0);
+
+/// `f(i, &mut y[i])` for every i, in parallel for long vectors (elementwise: deterministic).
+fn for_each_index<F>(y: &mut [Real], f: F)
+where
+    F: Fn(usize, &mut Real) + Sync + Send,
+{
+    if y.len() < PARALLEL_MIN {
+        y.iter_mut().enumerate().for_each(|(i, v)| f(i, v));
+        return;
+    }
+    y.par_iter_mut()
+        .with_min_len(1024)
+        .enumerate()
+        .for_each(|(i, v)| f(i, v));
 }
 
 /// Zero-fill incomplete Cholesky factor L (lower, CSR of the lower triangle incl. diagonal).
@@ -179,16 +200,23 @@ pub fn conjugate_gradient(
     else {
         return Ok(SolveInfo::default());
     };
+    let setup = std::time::Instant::now();
     let ic = match pre {
         Preconditioner::IncompleteCholesky => Ic0::new(a),
-        Preconditioner::Jacobi => None,
+        _ => None,
     };
-    let precondition = |r: &[Real], z: &mut [Real]| match &ic {
-        Some(ic) => ic.apply(r, z),
-        None => z
-            .iter_mut()
-            .enumerate()
-            .for_each(|(i, zi)| *zi = r[i] * inv_diag[i]),
+    let mut amg = match pre {
+        Preconditioner::Amg => Some(Amg::new(a)),
+        _ => None,
+    };
+    SETUP_NANOS.fetch_add(
+        setup.elapsed().as_nanos() as u64,
+        std::sync::atomic::Ordering::Relaxed,
+    );
+    let mut precondition = |r: &[Real], z: &mut [Real]| match (&ic, &mut amg) {
+        (Some(ic), _) => ic.apply(r, z),
+        (None, Some(amg)) => amg.apply(r, z),
+        (None, None) => for_each_index(z, |i, zi| *zi = r[i] * inv_diag[i]),
     };
     let mut r = r0;
     let mut z = vec![0.0; n];
@@ -217,9 +245,7 @@ pub fn conjugate_gradient(
         let rz_new = dot(&r, &z);
         let beta = rz_new / rz;
         rz = rz_new;
-        p.iter_mut()
-            .zip(z.iter())
-            .for_each(|(pi, zi)| *pi = zi + beta * *pi);
+        for_each_index(&mut p, |i, pi| *pi = z[i] + beta * *pi);
         rel = dot(&r, &r).sqrt() / bnorm;
         if !rel.is_finite() {
             return Err(SolveError::Breakdown);
