@@ -764,6 +764,21 @@ pub fn scaling_markdown(rows: &[ScalingPoint], options: &ScalingOptions) -> Stri
                 let _ = writeln!(md, "\n- No speed-up: a thread count has no succeeded run.");
             }
         }
+        let cores: Vec<f64> = threads
+            .iter()
+            .filter(|r| r.threads == 2 && r.status == "succeeded")
+            .map(|r| r.cpu_ms_per_step / r.ms_per_step)
+            .filter(|x| x.is_finite())
+            .collect();
+        if let Some(c) = median(&cores) {
+            if c < 1.5 {
+                let _ = writeln!(
+                    md,
+                    "- The 2-thread runs had {c:.2} cores on average (CPU/wall): other processes held the rest, \
+                     so this speed-up measures the machine's load more than the code. Rerun on an idle machine."
+                );
+            }
+        }
     }
     md
 }
@@ -930,6 +945,11 @@ pub struct FeatureRow {
     pub difference_ms: f64,
     /// The larger spread of this variant and the bare scene.
     pub noise_ms: f64,
+    /// median CPU time per step - the bare scene's (less sensitive to other processes
+    /// than wall time on a shared machine; includes rayon's idle spinning).
+    pub cpu_difference_ms: f64,
+    /// The larger CPU-time spread of this variant and the bare scene.
+    pub cpu_noise_ms: f64,
     pub status: String,
 }
 
@@ -937,6 +957,11 @@ impl FeatureRow {
     /// True when the difference to the bare scene is within the repeats' noise.
     pub fn within_noise(&self) -> bool {
         self.difference_ms.abs() <= self.noise_ms
+    }
+
+    /// The same on CPU time.
+    pub fn cpu_within_noise(&self) -> bool {
+        self.cpu_difference_ms.abs() <= self.cpu_noise_ms
     }
 }
 
@@ -955,6 +980,15 @@ pub fn feature_rows(
     };
     let bare_times = times(bare);
     let bare_median = median(&bare_times).unwrap_or(f64::NAN);
+    let cpu_times = |name: &str| -> Vec<f64> {
+        samples
+            .iter()
+            .filter(|s| s.variant == name && s.status == "succeeded")
+            .map(|s| s.cpu_ms_per_step)
+            .collect()
+    };
+    let bare_cpu = cpu_times(bare);
+    let bare_cpu_median = median(&bare_cpu).unwrap_or(f64::NAN);
     variants
         .iter()
         .map(|(name, description)| {
@@ -966,22 +1000,21 @@ pub fn feature_rows(
                 .map(|s| s.status.as_str())
                 .collect();
             let med = median(&t).unwrap_or(f64::NAN);
-            let cpu: Vec<f64> = mine
-                .iter()
-                .filter(|s| s.status == "succeeded")
-                .map(|s| s.cpu_ms_per_step)
-                .collect();
+            let cpu = cpu_times(name);
+            let cpu_median = median(&cpu).unwrap_or(f64::NAN);
             FeatureRow {
                 variant: name.to_string(),
                 description: description.to_string(),
                 particles: mine.first().map_or(0, |s| s.particles),
                 samples_ms: t.clone(),
                 median_ms: med,
-                median_cpu_ms: median(&cpu).unwrap_or(f64::NAN),
+                median_cpu_ms: cpu_median,
                 min_ms: t.iter().cloned().fold(f64::NAN, f64::min),
                 spread_ms: spread(&t),
                 difference_ms: med - bare_median,
                 noise_ms: spread(&t).max(spread(&bare_times)),
+                cpu_difference_ms: cpu_median - bare_cpu_median,
+                cpu_noise_ms: spread(&cpu).max(spread(&bare_cpu)),
                 status: if failed.is_empty() {
                     "succeeded".into()
                 } else {
@@ -1004,33 +1037,44 @@ pub fn features_markdown(rows: &[FeatureRow], repeats: usize) -> String {
     );
     let _ = writeln!(
         md,
-        "| variant | what | particles | median ms/step | min ms/step | spread | median CPU ms/step | difference vs bare | verdict | status |\n| --- | --- | ---: | ---: | ---: | ---: | ---: | ---: | --- | --- |"
+        "| variant | what | particles | median ms/step | min ms/step | spread | difference vs bare | verdict | median CPU ms/step | CPU difference vs bare | CPU verdict | status |\n| --- | --- | ---: | ---: | ---: | ---: | ---: | --- | ---: | ---: | --- | --- |"
     );
     let bare = rows.first().map_or(f64::NAN, |r| r.median_ms);
-    for r in rows {
-        let verdict = if !r.difference_ms.is_finite() {
+    let bare_cpu = rows.first().map_or(f64::NAN, |r| r.median_cpu_ms);
+    let verdict = |d: f64, within: bool, reference: f64| {
+        if !d.is_finite() {
             "—".to_string()
-        } else if r.within_noise() {
+        } else if within {
             "within noise".to_string()
         } else {
-            format!("{:+.1}% (above noise)", 100.0 * r.difference_ms / bare)
-        };
+            format!("{:+.1}% (above noise)", 100.0 * d / reference)
+        }
+    };
+    for r in rows {
         let _ = writeln!(
             md,
-            "| {} | {} | {} | {} | {} | {} | {} | {} ± {} | {} | {} |",
+            "| {} | {} | {} | {} | {} | {} | {} ± {} | {} | {} | {} ± {} | {} | {} |",
             r.variant,
             r.description,
             r.particles,
             md_num(r.median_ms, 3),
             md_num(r.min_ms, 3),
             md_num(r.spread_ms, 3),
-            md_num(r.median_cpu_ms, 3),
             md_num(r.difference_ms, 3),
             md_num(r.noise_ms, 3),
-            verdict,
+            verdict(r.difference_ms, r.within_noise(), bare),
+            md_num(r.median_cpu_ms, 3),
+            md_num(r.cpu_difference_ms, 3),
+            md_num(r.cpu_noise_ms, 3),
+            verdict(r.cpu_difference_ms, r.cpu_within_noise(), bare_cpu),
             r.status.replace('|', "/")
         );
     }
+    let _ = writeln!(
+        md,
+        "\nCPU time is the process's user + system time over the same interval (all threads, rayon's idle spinning included): \
+         on a machine shared with other processes it varies less than wall time."
+    );
     md
 }
 

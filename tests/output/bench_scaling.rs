@@ -179,6 +179,13 @@ fn the_scaling_tables_carry_every_row_and_the_fitted_exponent() {
     assert!(md.contains("| 160000 | 2 |"), "{md}");
     assert!(md.contains("failed: step 3"), "{md}");
     assert!(md.contains("the largest stages are solve 70%, assemble 20%, neighbors 10%"), "{md}");
+    assert!(!md.contains("cores on average"), "{md}");
+    // 2-thread runs that got less than 1.5 cores say so
+    for r in rows.iter_mut().filter(|r| r.study == "threads" && r.threads == 2) {
+        r.cpu_ms_per_step = 0.9 * r.ms_per_step;
+    }
+    let md = scaling_markdown(&rows, &ScalingOptions::default());
+    assert!(md.contains("The 2-thread runs had 0.90 cores on average"), "{md}");
 }
 
 fn sample(variant: &str, ms: f64) -> FeatureSample {
@@ -221,6 +228,9 @@ fn feature_rows_compare_medians_with_the_noise_of_the_repeats() {
     assert!(!rows[2].within_noise());
     let md = mpsfsi::bench::scaling::features_markdown(&rows, 3);
     assert!(md.contains("| probes | 8 probes | 20000 | 101.000 |"), "{md}");
+    assert_eq!(rows[2].cpu_difference_ms, 60.0);
+    assert_eq!(rows[2].cpu_noise_ms, 12.0);
+    assert!(!rows[2].cpu_within_noise() && rows[1].cpu_within_noise());
     assert!(md.contains("within noise"), "{md}");
     assert!(md.contains("+30.0% (above noise)"), "{md}");
 }
