@@ -390,7 +390,11 @@ pub fn measure_engine(case: &Case, steps: u64, dt: f64, study: &str) -> ScalingP
         match outcome {
             Ok(r) => r,
             Err(panic) => {
-                return ScalingPoint::failed(study, threads, format!("panicked: {}", panic_text(&panic)))
+                return ScalingPoint::failed(
+                    study,
+                    threads,
+                    format!("panicked: {}", panic_text(&panic)),
+                )
             }
         };
     let per = |bytes: Option<u64>| match (before, bytes) {
@@ -787,10 +791,7 @@ pub fn scaling_markdown(rows: &[ScalingPoint], options: &ScalingOptions) -> Stri
 pub fn write_scaling(out_dir: &Path, options: &ScalingOptions) -> io::Result<Vec<ScalingPoint>> {
     let rows = scaling_study(options);
     std::fs::write(out_dir.join("scaling.csv"), scaling_csv(&rows))?;
-    std::fs::write(
-        out_dir.join("scaling.md"),
-        scaling_markdown(&rows, options),
-    )?;
+    std::fs::write(out_dir.join("scaling.md"), scaling_markdown(&rows, options))?;
     Ok(rows)
 }
 
@@ -804,8 +805,12 @@ pub const FEATURE_STEPS: u64 = 30;
 /// One variant of the feature-cost scene: its name and the overrides on the bare tank.
 pub fn feature_variants() -> Vec<(&'static str, &'static str, Vec<String>)> {
     let value = tank_case_value(FEATURE_PARTICLES, FEATURE_STEPS);
-    let w = value["fluid_blocks"][0]["polygon"][2][0].as_f64().unwrap_or(2.0);
-    let h = value["fluid_blocks"][0]["polygon"][2][1].as_f64().unwrap_or(1.0);
+    let w = value["fluid_blocks"][0]["polygon"][2][0]
+        .as_f64()
+        .unwrap_or(2.0);
+    let h = value["fluid_blocks"][0]["polygon"][2][1]
+        .as_f64()
+        .unwrap_or(1.0);
     let b = 0.1 * h;
     let fixed_box = |name: &str, x: f64, y: f64| {
         json!([{
@@ -823,7 +828,11 @@ pub fn feature_variants() -> Vec<(&'static str, &'static str, Vec<String>)> {
         })
         .collect();
     vec![
-        ("bare", "no body, no viscosity, no probes, no snapshots", vec![]),
+        (
+            "bare",
+            "no body, no viscosity, no probes, no snapshots",
+            vec![],
+        ),
         (
             "body_submerged",
             "a fixed (prescribed, zero velocity) box of 0.2 H submerged at mid-depth",
@@ -1118,7 +1127,8 @@ pub fn write_features(out_dir: &Path, repeats: usize) -> io::Result<Vec<FeatureR
     }
     let names: Vec<(&str, &str)> = variants.iter().map(|(n, d, _)| (*n, *d)).collect();
     let rows = feature_rows(&names, &samples, "bare");
-    let mut csv = String::from("variant,repeat,particles,steps,ms_per_step,cpu_ms_per_step,status\n");
+    let mut csv =
+        String::from("variant,repeat,particles,steps,ms_per_step,cpu_ms_per_step,status\n");
     for (k, s) in samples.iter().enumerate() {
         let _ = writeln!(
             csv,
@@ -1133,6 +1143,9 @@ pub fn write_features(out_dir: &Path, repeats: usize) -> io::Result<Vec<FeatureR
         );
     }
     std::fs::write(out_dir.join("features.csv"), csv)?;
-    std::fs::write(out_dir.join("features.md"), features_markdown(&rows, repeats))?;
+    std::fs::write(
+        out_dir.join("features.md"),
+        features_markdown(&rows, repeats),
+    )?;
     Ok(rows)
 }

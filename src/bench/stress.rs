@@ -114,7 +114,13 @@ pub fn perturb_positions(positions: &mut [Vec2], amplitude: Real, seed: u64) {
 
 /// Time-weighted mean of interval means (`times[k]` ends the interval of `values[k]`,
 /// the first starting at `start`) over the intervals lying in [from, to].
-pub fn window_mean(start: Real, times: &[Real], values: &[Real], from: Real, to: Real) -> Option<Real> {
+pub fn window_mean(
+    start: Real,
+    times: &[Real],
+    values: &[Real],
+    from: Real,
+    to: Real,
+) -> Option<Real> {
     let (mut sum, mut span) = (0.0, 0.0);
     let mut previous = start;
     for (t, v) in times.iter().zip(values) {
@@ -131,8 +137,7 @@ pub fn window_mean(start: Real, times: &[Real], values: &[Real], from: Real, to:
 /// `[0, end]` (NaN where a window holds no interval).
 pub fn load_drift(times: &[Real], loads: &[Real], end: Real, expected: Real) -> (Real, Real) {
     let err = |from: Real, to: Real| {
-        window_mean(0.0, times, loads, from, to)
-            .map_or(Real::NAN, |m| relative_error(m, expected))
+        window_mean(0.0, times, loads, from, to).map_or(Real::NAN, |m| relative_error(m, expected))
     };
     (err(0.1 * end, 0.2 * end), err(0.9 * end, end))
 }
@@ -180,7 +185,8 @@ fn cases_dir() -> std::path::PathBuf {
 }
 
 fn set(v: &mut Value, o: &str) -> io::Result<()> {
-    case::apply_override(v, o).map_err(|e| io::Error::new(io::ErrorKind::InvalidData, e.to_string()))
+    case::apply_override(v, o)
+        .map_err(|e| io::Error::new(io::ErrorKind::InvalidData, e.to_string()))
 }
 
 fn parse(v: Value) -> io::Result<Case> {
@@ -191,7 +197,10 @@ fn parse(v: Value) -> io::Result<Case> {
 /// at its first chine time.
 pub fn wedge_case(base: &Value, speed: Real, angle: Real, l0: Real) -> io::Result<Value> {
     let mut v = base.clone();
-    set(&mut v, &format!("bodies.0.motion.velocity=[0.0,{}]", -speed))?;
+    set(
+        &mut v,
+        &format!("bodies.0.motion.velocity=[0.0,{}]", -speed),
+    )?;
     set(&mut v, &format!("bodies.0.angle={angle}"))?;
     set(&mut v, &format!("particle_spacing={l0}"))?;
     let case = parse(v.clone())?;
@@ -212,11 +221,15 @@ pub fn wedge_case(base: &Value, speed: Real, angle: Real, l0: Real) -> io::Resul
         .iter()
         .flat_map(|b| b.polygon.iter().map(|p| p[0] * d[0] + p[1] * d[1]))
         .fold(Real::INFINITY, Real::min);
-    let (contact, t_chine) = chine_time(&body.polygon, body.position, body.angle, *velocity, surface)
-        .ok_or_else(|| io::Error::other("no chine time"))?;
+    let (contact, t_chine) =
+        chine_time(&body.polygon, body.position, body.angle, *velocity, surface)
+            .ok_or_else(|| io::Error::other("no chine time"))?;
     set(&mut v, &format!("time.end={}", contact + t_chine))?;
     // loads at 50 rows over the run, no snapshots
-    set(&mut v, &format!("output.load_interval={}", (contact + t_chine) / 50.0))?;
+    set(
+        &mut v,
+        &format!("output.load_interval={}", (contact + t_chine) / 50.0),
+    )?;
     set(&mut v, "output.snapshot_interval=null")?;
     Ok(v)
 }
@@ -234,7 +247,10 @@ pub fn stress_runs(quick: bool) -> io::Result<Vec<StressRun>> {
     let a = super::reference::KOSHIZUKA_OKA_COLUMN_WIDTH;
     let dam_end = if quick { 2.0 } else { 5.0 };
     let per_width = if quick { 10 } else { 40 };
-    set(&mut dam, &format!("particle_spacing={}", a / per_width as Real))?;
+    set(
+        &mut dam,
+        &format!("particle_spacing={}", a / per_width as Real),
+    )?;
     set(&mut dam, &format!("time.end={dam_end}"))?;
     set(&mut dam, "output.load_interval=0.01")?;
     set(&mut dam, "output.snapshot_interval=null")?;
@@ -254,7 +270,10 @@ pub fn stress_runs(quick: bool) -> io::Result<Vec<StressRun>> {
         for speed in [20.0, 30.0] {
             runs.push(StressRun {
                 name: format!("wedge_{speed:.0}ms"),
-                description: format!("30° wedge at constant {speed} m/s, l0 = {} mm, to the chine time", l0 * 1e3),
+                description: format!(
+                    "30° wedge at constant {speed} m/s, l0 = {} mm, to the chine time",
+                    l0 * 1e3
+                ),
                 case: wedge_case(&base, speed, 0.0, l0)?,
                 kind: StressKind::Plain,
             });
@@ -263,7 +282,9 @@ pub fn stress_runs(quick: bool) -> io::Result<Vec<StressRun>> {
             .bodies
             .first()
             .and_then(|b| match &b.motion {
-                Motion::Prescribed { velocity, .. } => Some((velocity[0].powi(2) + velocity[1].powi(2)).sqrt()),
+                Motion::Prescribed { velocity, .. } => {
+                    Some((velocity[0].powi(2) + velocity[1].powi(2)).sqrt())
+                }
                 _ => None,
             })
             .unwrap_or(6.15);
@@ -359,13 +380,25 @@ pub fn run_stress(run: &StressRun, dir: &Path) -> StressOutcome {
             o.wall_time_s = summary.wall_time_s;
             o.max_speed = summary.max_velocity;
             if run.kind == StressKind::StillTank {
-                let wall = case.walls.first().map(|w| w.name.clone()).unwrap_or_default();
-                let text = std::fs::read_to_string(dir.join("loads.csv")).map_err(|e| e.to_string())?;
+                let wall = case
+                    .walls
+                    .first()
+                    .map(|w| w.name.clone())
+                    .unwrap_or_default();
+                let text =
+                    std::fs::read_to_string(dir.join("loads.csv")).map_err(|e| e.to_string())?;
                 let rows = parse_loads_csv(&text).map_err(|e| e.to_string())?;
-                let (t, fy): (Vec<Real>, Vec<Real>) =
-                    rows.iter().filter(|r| r.body == wall).map(|r| (r.time, r.fy)).unzip();
-                let (early, late) =
-                    load_drift(&t, &fy, summary.simulated_time, water_weight(&case, summary.particles));
+                let (t, fy): (Vec<Real>, Vec<Real>) = rows
+                    .iter()
+                    .filter(|r| r.body == wall)
+                    .map(|r| (r.time, r.fy))
+                    .unzip();
+                let (early, late) = load_drift(
+                    &t,
+                    &fy,
+                    summary.simulated_time,
+                    water_weight(&case, summary.particles),
+                );
                 o.load_error_early = early;
                 o.load_error_late = late;
             }
@@ -402,14 +435,23 @@ pub fn run_stress(run: &StressRun, dir: &Path) -> StressOutcome {
 
 /// The engine's own loop (as in `run::run_case`, without bodies or writer) on a
 /// perturbed lattice; the tank load is recorded every step.
-fn perturbed_tank(case: &Case, amplitude: Real, seed: u64, mut out: StressOutcome) -> StressOutcome {
+fn perturbed_tank(
+    case: &Case,
+    amplitude: Real,
+    seed: u64,
+    mut out: StressOutcome,
+) -> StressOutcome {
     if let Err(e) = case::validate(case, &case::Limits::default()) {
         out.reason = format!("case rejected: {e}");
         return out;
     }
     let started = Instant::now();
     let mut sim = Simulation::new(case);
-    perturb_positions(&mut sim.particles.position, amplitude * case.particle_spacing, seed);
+    perturb_positions(
+        &mut sim.particles.position,
+        amplitude * case.particle_spacing,
+        seed,
+    );
     // neighbours, wall contacts and number densities of the moved particles
     sim.initialize();
     let tank = 0;
@@ -436,14 +478,24 @@ fn perturbed_tank(case: &Case, amplitude: Real, seed: u64, mut out: StressOutcom
             }
         }
     }
-    out.status = if failure.is_some() { "failed" } else { "completed" }.into();
+    out.status = if failure.is_some() {
+        "failed"
+    } else {
+        "completed"
+    }
+    .into();
     out.reason = failure.unwrap_or_default();
     out.final_time = sim.time;
     out.steps = sim.steps;
     out.particles = sim.particle_count();
     out.wall_time_s = started.elapsed().as_secs_f64();
     out.max_speed = max_speed;
-    let (early, late) = load_drift(&times, &loads, sim.time, water_weight(case, sim.particle_count()));
+    let (early, late) = load_drift(
+        &times,
+        &loads,
+        sim.time,
+        water_weight(case, sim.particle_count()),
+    );
     out.load_error_early = early;
     out.load_error_late = late;
     out
@@ -474,7 +526,11 @@ pub fn stress_table(rows: &[StressOutcome]) -> String {
             r.steps,
             r.particles,
             r.wall_time_s,
-            if r.max_speed.is_finite() { format!("{:.3}", r.max_speed) } else { "—".into() },
+            if r.max_speed.is_finite() {
+                format!("{:.3}", r.max_speed)
+            } else {
+                "—".into()
+            },
             pct(r.load_error_early),
             pct(r.load_error_late),
             r.reason.replace('|', "/")
@@ -484,7 +540,11 @@ pub fn stress_table(rows: &[StressOutcome]) -> String {
 }
 
 /// `stress.md`: the scenes, the table, the CFL sweep table when given.
-pub fn stress_markdown(rows: &[StressOutcome], cfl: &[super::report::StressRow], quick: bool) -> String {
+pub fn stress_markdown(
+    rows: &[StressOutcome],
+    cfl: &[super::report::StressRow],
+    quick: bool,
+) -> String {
     let mut md = String::from("# mpsfsi stress runs\n\n");
     let _ = writeln!(
         md,
@@ -498,17 +558,28 @@ pub fn stress_markdown(rows: &[StressOutcome], cfl: &[super::report::StressRow],
     }
     md.push('\n');
     md.push_str(&stress_table(rows));
-    let failed: Vec<&str> = rows.iter().filter(|r| r.status != "completed").map(|r| r.name.as_str()).collect();
+    let failed: Vec<&str> = rows
+        .iter()
+        .filter(|r| r.status != "completed")
+        .map(|r| r.name.as_str())
+        .collect();
     let _ = writeln!(
         md,
         "\n- {} of {} runs completed{}.",
         rows.len() - failed.len(),
         rows.len(),
-        if failed.is_empty() { String::new() } else { format!("; not completed: {}", failed.join(", ")) }
+        if failed.is_empty() {
+            String::new()
+        } else {
+            format!("; not completed: {}", failed.join(", "))
+        }
     );
     if !cfl.is_empty() {
         let _ = writeln!(md, "\n## CFL sweep of the dam break\n");
-        let _ = writeln!(md, "| variant | CFL | completed | error | note |\n| --- | ---: | --- | ---: | --- |");
+        let _ = writeln!(
+            md,
+            "| variant | CFL | completed | error | note |\n| --- | ---: | --- | ---: | --- |"
+        );
         for s in cfl {
             let _ = writeln!(
                 md,

@@ -96,7 +96,10 @@ fn the_scaling_tank_is_two_to_one_near_the_target_and_valid() {
         let (nx, ny) = tank_lattice(target);
         assert_eq!(nx, 2 * ny);
         let n = (nx * ny) as f64;
-        assert!((n / target as f64 - 1.0).abs() < 0.02, "{target}: {nx} x {ny}");
+        assert!(
+            (n / target as f64 - 1.0).abs() < 0.02,
+            "{target}: {nx} x {ny}"
+        );
     }
     let case = mpsfsi::case::parse_case_value(tank_case_value(10_000, 20)).unwrap();
     mpsfsi::case::validate(&case, &mpsfsi::case::Limits::default()).unwrap();
@@ -105,7 +108,10 @@ fn the_scaling_tank_is_two_to_one_near_the_target_and_valid() {
     assert_eq!(case.scheme.solver_tolerance, 1e-8);
     let (nx, ny) = tank_lattice(10_000);
     let estimated = mpsfsi::case::estimated_particles(&case).unwrap();
-    assert!((estimated / (nx * ny) as f64 - 1.0).abs() < 1e-9, "{estimated}");
+    assert!(
+        (estimated / (nx * ny) as f64 - 1.0).abs() < 1e-9,
+        "{estimated}"
+    );
 }
 
 fn point(study: &str, threads: usize, n: usize, ms: f64) -> ScalingPoint {
@@ -143,7 +149,8 @@ fn the_scaling_tables_carry_every_row_and_the_fitted_exponent() {
         .collect();
     let mut failed = point("size", 2, 640_000, f64::NAN);
     failed.status = "failed".into();
-    failed.note = "step 3, t = 0.0015 s: pressure solve failed: no convergence, 2000 iterations".into();
+    failed.note =
+        "step 3, t = 0.0015 s: pressure solve failed: no convergence, 2000 iterations".into();
     rows.push(failed);
     rows.push(point("threads", 1, 40_000, 10.0));
     rows.push(point("threads", 2, 40_000, 6.0));
@@ -178,14 +185,23 @@ fn the_scaling_tables_carry_every_row_and_the_fitted_exponent() {
     assert!(md.contains("Speed-up 2 threads / 1 thread: 1.60×"), "{md}");
     assert!(md.contains("| 160000 | 2 |"), "{md}");
     assert!(md.contains("failed: step 3"), "{md}");
-    assert!(md.contains("the largest stages are solve 70%, assemble 20%, neighbors 10%"), "{md}");
+    assert!(
+        md.contains("the largest stages are solve 70%, assemble 20%, neighbors 10%"),
+        "{md}"
+    );
     assert!(!md.contains("cores on average"), "{md}");
     // 2-thread runs that got less than 1.5 cores say so
-    for r in rows.iter_mut().filter(|r| r.study == "threads" && r.threads == 2) {
+    for r in rows
+        .iter_mut()
+        .filter(|r| r.study == "threads" && r.threads == 2)
+    {
         r.cpu_ms_per_step = 0.9 * r.ms_per_step;
     }
     let md = scaling_markdown(&rows, &ScalingOptions::default());
-    assert!(md.contains("The 2-thread runs had 0.90 cores on average"), "{md}");
+    assert!(
+        md.contains("The 2-thread runs had 0.90 cores on average"),
+        "{md}"
+    );
 }
 
 fn sample(variant: &str, ms: f64) -> FeatureSample {
@@ -212,7 +228,11 @@ fn feature_rows_compare_medians_with_the_noise_of_the_repeats() {
         sample("probes", 102.0),
         sample("body", 131.0),
     ];
-    let variants = [("bare", "nothing"), ("probes", "8 probes"), ("body", "a box")];
+    let variants = [
+        ("bare", "nothing"),
+        ("probes", "8 probes"),
+        ("body", "a box"),
+    ];
     let rows = feature_rows(&variants, &samples, "bare");
     assert_eq!(rows.len(), 3);
     assert_eq!(rows[0].median_ms, 100.0);
@@ -227,7 +247,10 @@ fn feature_rows_compare_medians_with_the_noise_of_the_repeats() {
     assert_eq!(rows[2].median_cpu_ms, 260.0);
     assert!(!rows[2].within_noise());
     let md = mpsfsi::bench::scaling::features_markdown(&rows, 3);
-    assert!(md.contains("| probes | 8 probes | 20000 | 101.000 |"), "{md}");
+    assert!(
+        md.contains("| probes | 8 probes | 20000 | 101.000 |"),
+        "{md}"
+    );
     assert_eq!(rows[2].cpu_difference_ms, 60.0);
     assert_eq!(rows[2].cpu_noise_ms, 12.0);
     assert!(!rows[2].cpu_within_noise() && rows[1].cpu_within_noise());
@@ -249,9 +272,7 @@ fn the_perturbation_is_seeded_bounded_and_not_biased() {
     perturb_positions(&mut c, 0.2, 8);
     assert_ne!(a, c);
     let offsets: Vec<Vec2> = a.iter().zip(&lattice).map(|(p, q)| p - q).collect();
-    assert!(offsets
-        .iter()
-        .all(|d| d.x.abs() <= 0.2 && d.y.abs() <= 0.2));
+    assert!(offsets.iter().all(|d| d.x.abs() <= 0.2 && d.y.abs() <= 0.2));
     // uniform on [-0.2, 0.2]: mean ~ 0, the extremes reached, variance 0.04/3
     let n = offsets.len() as f64;
     let mean_x = offsets.iter().map(|d| d.x).sum::<f64>() / n;
@@ -283,7 +304,13 @@ fn load_drift_compares_the_early_and_late_windows_with_the_weight() {
 
 #[test]
 fn the_chine_time_of_the_reference_wedge_is_b_tan_beta_over_pi_v() {
-    let wedge = [[0.0, 0.0], [0.25, 0.1443], [0.25, 0.3], [-0.25, 0.3], [-0.25, 0.1443]];
+    let wedge = [
+        [0.0, 0.0],
+        [0.25, 0.1443],
+        [0.25, 0.3],
+        [-0.25, 0.3],
+        [-0.25, 0.1443],
+    ];
     let (contact, t) = chine_time(&wedge, [0.0, 0.0], 0.0, [0.0, -6.15], 0.0).unwrap();
     assert!(contact.abs() < 1e-12);
     // references.md: t_chine = 14.9 ms
@@ -320,7 +347,10 @@ fn the_stress_table_shows_failures_with_their_diagnosis() {
         load_error_late: 0.0123,
     };
     let md = stress_table(&[row]);
-    assert!(md.contains("| wedge_30ms | failed | 0.0013 / 0.0031 | 40 | 20000 |"), "{md}");
+    assert!(
+        md.contains("| wedge_30ms | failed | 0.0013 / 0.0031 | 40 | 20000 |"),
+        "{md}"
+    );
     assert!(md.contains("1.23%"), "{md}");
     // a pipe in the diagnosis does not break the table
     assert!(md.contains("runaway velocity 151 m/s / limit 150"), "{md}");
@@ -337,7 +367,10 @@ fn a_tiny_tank_is_measured_with_stages_iterations_and_memory() {
     assert!(row.ms_per_step > 0.0 && row.particle_steps_per_s > 0.0);
     assert!(row.solver_iterations_per_step >= 1.0);
     // the stages account for the step (the rest is the loop itself)
-    assert!(row.stage_ms.total() <= row.ms_per_step * 1.001 + 1e-6, "{row:?}");
+    assert!(
+        row.stage_ms.total() <= row.ms_per_step * 1.001 + 1e-6,
+        "{row:?}"
+    );
     assert!(row.stage_ms.total() > 0.5 * row.ms_per_step, "{row:?}");
     if std::path::Path::new("/proc/self/status").exists() {
         assert!(row.peak_mb.is_finite() && row.bytes_per_particle_peak.is_finite());
@@ -363,5 +396,8 @@ fn a_perturbed_tank_runs_through_the_stress_driver() {
     assert_eq!(o.status, "completed", "{o:?}");
     assert!((o.final_time - 0.01).abs() < 1e-9);
     assert_eq!(o.particles, 200);
-    assert!(o.max_speed.is_finite() && o.load_error_late.is_finite(), "{o:?}");
+    assert!(
+        o.max_speed.is_finite() && o.load_error_late.is_finite(),
+        "{o:?}"
+    );
 }
