@@ -25,6 +25,8 @@ pub mod measure;
 pub mod operators;
 pub mod reference;
 pub mod report;
+pub mod scaling;
+pub mod stress;
 
 use crate::case::{self, Case, Scheme};
 use crate::engine::math::Real;
@@ -44,9 +46,41 @@ pub struct BenchOptions {
     pub quick: bool,
     /// Also the operator convergence study (bench::operators, written separately).
     pub operators: bool,
-    /// Also the stability stress runs (CFL sweep of the dam break, long hydrostatic).
+    /// Also the stability stress runs ([`stress`]: long dam break, fast and heeled
+    /// wedges, perturbed lattice, long hydrostatic) and the CFL sweep; `stress.md`.
     pub stress: bool,
+    /// The scaling study of [`scaling`] (`scaling.csv`, `scaling.md`).
+    pub scaling: bool,
+    /// The feature-cost study of [`scaling`] (`features.csv`, `features.md`).
+    pub features: bool,
+    /// Skip the run-time-against-error study (it is skipped anyway with `scaling` or
+    /// `features`).
+    pub no_study: bool,
+    /// Sizes, steps and repeats of `scaling` / `features`.
+    pub scaling_options: scaling::ScalingOptions,
     pub out_dir: PathBuf,
+}
+
+impl BenchOptions {
+    /// The options of the run-time-against-error study alone (`quick` or not).
+    pub fn study(quick: bool, out_dir: PathBuf) -> Self {
+        Self {
+            quick,
+            operators: false,
+            stress: false,
+            scaling: false,
+            features: false,
+            no_study: false,
+            scaling_options: scaling::ScalingOptions::default(),
+            out_dir,
+        }
+    }
+
+    /// Whether the run-time-against-error study runs: not when an instrument
+    /// (`scaling`, `features`) was asked for, or `no_study`.
+    pub fn runs_study(&self) -> bool {
+        !(self.no_study || self.scaling || self.features)
+    }
 }
 
 /// A scheme variant compared by the benchmark.
@@ -593,34 +627,55 @@ pub fn run(options: BenchOptions) -> io::Result<()> {
     let started = Instant::now();
     std::fs::create_dir_all(&options.out_dir)?;
     let runs_dir = options.out_dir.join("runs");
+    if options.scaling {
+        scaling::write_scaling(&options.out_dir, &options.scaling_options)?;
+    }
+    if options.features {
+        scaling::write_features(&options.out_dir, options.scaling_options.repeats)?;
+    }
     let mut results = Vec::new();
     let cases = bench_cases(options.quick)?;
-    for bench in &cases {
-        for variant in variants() {
-            for &spacing in &bench.spacings {
-                let r = run_one(bench, &variant, spacing, &runs_dir);
-                eprintln!(
-                    "bench {:<12} {:<14} l0 = {:<9.5} {:>7} particles {:>6} steps {:>8.2} s  error {:.4e}  {}",
-                    r.case, r.variant, r.spacing, r.particles, r.steps, r.wall_time_s, r.error, r.note
-                );
-                results.push(r);
-                report::write_results_csv(&options.out_dir.join("results.csv"), &results)?;
+    if options.runs_study() {
+        for bench in &cases {
+            for variant in variants() {
+                for &spacing in &bench.spacings {
+                    let r = run_one(bench, &variant, spacing, &runs_dir);
+                    eprintln!(
+                        "bench {:<12} {:<14} l0 = {:<9.5} {:>7} particles {:>6} steps {:>8.2} s  error {:.4e}  {}",
+                        r.case, r.variant, r.spacing, r.particles, r.steps, r.wall_time_s, r.error, r.note
+                    );
+                    results.push(r);
+                    report::write_results_csv(&options.out_dir.join("results.csv"), &results)?;
+                }
             }
         }
     }
-    let mut stress = Vec::new();
+    let mut cfl = Vec::new();
+    let mut stress_rows = Vec::new();
     if options.stress {
-        stress = report::cfl_sweep(&cases, &runs_dir.join("stress"));
+        stress_rows = stress::run_all(options.quick, &runs_dir.join("stress"))?;
+        std::fs::write(
+            options.out_dir.join("stress.md"),
+            stress::stress_markdown(&stress_rows, &[], options.quick),
+        )?;
+        cfl = report::cfl_sweep(&cases, &runs_dir.join("stress"));
+        std::fs::write(
+            options.out_dir.join("stress.md"),
+            stress::stress_markdown(&stress_rows, &cfl, options.quick),
+        )?;
     }
     let total = started.elapsed().as_secs_f64();
-    report::write_report(
-        &options.out_dir,
-        &cases,
-        &results,
-        &stress,
-        options.quick,
-        total,
-    )?;
+    if options.runs_study() {
+        report::write_report(
+            &options.out_dir,
+            &cases,
+            &results,
+            &cfl,
+            &stress_rows,
+            options.quick,
+            total,
+        )?;
+    }
     if options.operators {
         report::write_operators(&options.out_dir)?;
     }

@@ -137,6 +137,7 @@ pub fn write_report(
     cases: &[BenchCase],
     results: &[BenchResult],
     stress: &[StressRow],
+    stress_runs: &[super::stress::StressOutcome],
     quick: bool,
     total_seconds: f64,
 ) -> io::Result<()> {
@@ -266,6 +267,11 @@ pub fn write_report(
             );
         }
         md.push('\n');
+    }
+    if !stress_runs.is_empty() {
+        let _ = writeln!(md, "## Stress runs\n");
+        md.push_str(&super::stress::stress_table(stress_runs));
+        let _ = writeln!(md, "\nScenes and notes in `stress.md`.\n");
     }
     std::fs::write(out_dir.join("report.md"), md)
 }

@@ -27,6 +27,15 @@ pub fn bench(args: BenchArgs) -> i32 {
         quick: args.quick,
         operators: args.operators,
         stress: args.stress,
+        scaling: args.scaling,
+        features: args.features,
+        no_study: args.no_study,
+        scaling_options: mpsfsi::bench::scaling::ScalingOptions {
+            max_particles: args.max_particles,
+            steps: args.scaling_steps,
+            threads_particles: args.threads_particles,
+            repeats: args.repeats,
+        },
         out_dir: args.out,
     };
     match mpsfsi::bench::run(options) {

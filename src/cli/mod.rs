@@ -65,9 +65,36 @@ pub struct BenchArgs {
     /// Include the operator convergence study.
     #[arg(long)]
     pub operators: bool,
-    /// Include the stress study (CFL sweep of the dam break per variant).
+    /// Include the stress runs (dam break to 5 s, wedges at 20 and 30 m/s and heeled 10°,
+    /// perturbed lattice, long hydrostatic; `stress.md`) and the CFL sweep of the dam
+    /// break per variant. With `--quick`: shorter and coarser.
     #[arg(long)]
     pub stress: bool,
+    /// Scaling study: step cost, stage times, solver iterations and bytes per particle of
+    /// a still tank at 10k, 40k, 160k, ... particles up to `--max-particles`, and 1 vs 2
+    /// threads (`scaling.csv`, `scaling.md`). Skips the run-time-against-error study.
+    #[arg(long)]
+    pub scaling: bool,
+    /// Feature-cost study: the same tank with and without a body, viscosity, probes,
+    /// snapshots, repeated (`features.csv`, `features.md`). Skips the run-time-against-error study.
+    #[arg(long)]
+    pub features: bool,
+    /// Skip the run-time-against-error study (e.g. `--stress --no-study`).
+    #[arg(long)]
+    pub no_study: bool,
+    /// Largest size of `--scaling` (640000 and 1300000 are the large sizes).
+    #[arg(long, default_value_t = 160_000)]
+    pub max_particles: usize,
+    /// Timed steps per size of `--scaling` (after one warm-up step).
+    #[arg(long, default_value_t = 20)]
+    pub scaling_steps: u64,
+    /// Size (particles) of the 1-vs-2-thread comparison of `--scaling`: the largest study
+    /// size not above it.
+    #[arg(long, default_value_t = 160_000)]
+    pub threads_particles: usize,
+    /// Repeats of each `--features` variant.
+    #[arg(long, default_value_t = 3)]
+    pub repeats: usize,
     /// Directory for report.md, results.csv and the plots.
     #[arg(long)]
     pub out: PathBuf,

@@ -153,13 +153,7 @@ fn a_coarse_dam_break_runs_and_is_scored_against_martin_and_moyce() {
 fn quick_bench_writes_its_report() {
     let out_dir = crate::scratch_dir("quick-bench");
     let started = std::time::Instant::now();
-    mpsfsi::bench::run(mpsfsi::bench::BenchOptions {
-        quick: true,
-        operators: false,
-        stress: false,
-        out_dir: out_dir.clone(),
-    })
-    .unwrap();
+    mpsfsi::bench::run(mpsfsi::bench::BenchOptions::study(true, out_dir.clone())).unwrap();
     let seconds = started.elapsed().as_secs_f64();
     eprintln!("quick bench: {seconds:.1} s");
     let results = std::fs::read_to_string(out_dir.join("results.csv")).unwrap();

@@ -2,6 +2,7 @@
 //! benchmark's error measures.
 
 mod bench_measures;
+mod bench_scaling;
 mod filter;
 mod plot;
 mod vtk;

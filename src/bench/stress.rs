@@ -1,0 +1,634 @@
+//! The stress runs of `mpsfsi bench --stress` (issue 6), beside the CFL sweep of
+//! [`super::report::cfl_sweep`]: scenes that push the scheme, each reported as
+//! completed or failed with the engine's own diagnosis. A failed run is a result,
+//! never a panic.
+//!
+//! - `dam_break_long`: the Koshizuka & Oka dam break to t = 5 s at l0 = a/40 (impact on
+//!   the far wall, overturning wave, sloshing); quick: 2 s at a/10.
+//! - `wedge_20ms`, `wedge_30ms`: the 30° wedge of
+//!   `cases/wedge_30deg_constant_velocity.json` at constant 20 and 30 m/s, spacing
+//!   10 mm (quick: 20 mm), to the chine time (the first chine reaching the undisturbed surface level
+//!   under Wagner's 2/π rise-up: t = 2 h_chine / (π V), = B tanβ / (π V) for a
+//!   symmetric wedge). The case's absolute speed limit (150 m/s for 6.15 m/s) is scaled
+//!   with V: the jet tip of a 30° wedge runs at about 5 V.
+//! - `wedge_heel_10deg`: the same wedge at its case speed rotated 10° (deadrise 20° on
+//!   one side and 40° on the other), to its first chine time.
+//! - `perturbed_lattice`: the still tank of `cases/hydrostatic.json` with every fluid
+//!   particle moved by a seeded uniform random offset in ±0.2 l0 per axis after the
+//!   scene is built (bench side: the case format has no such option), stepped by the
+//!   engine directly, to 2 s (quick: 0.5 s).
+//! - `hydrostatic_long`: `cases/hydrostatic.json` to 20 s (2 s in the quick form).
+//!
+//! For the still tanks the report adds the load drift: the relative error of the mean
+//! vertical tank load against the water weight early (10-20% of the run) and late
+//! (last 10%), and the largest particle speed.
+
+use super::measure::relative_error;
+use crate::case::{self, Case, Motion};
+use crate::engine::math::{Real, Vec2};
+use crate::engine::Simulation;
+use crate::output::filter::parse_loads_csv;
+use crate::run::{self, RunStatus};
+use serde_json::Value;
+use std::fmt::Write as _;
+use std::io;
+use std::path::Path;
+use std::time::Instant;
+
+/// Amplitude of the lattice perturbation (ratio of l0).
+pub const PERTURBATION: Real = 0.2;
+/// Seed of the lattice perturbation.
+pub const PERTURBATION_SEED: u64 = 20_240_601;
+
+/// How a stress run is driven and measured.
+#[derive(Debug, Clone, PartialEq)]
+pub enum StressKind {
+    /// Through `run::run_case` (outputs written); no extra measure.
+    Plain,
+    /// Through `run::run_case`; the load drift of the first wall is measured.
+    StillTank,
+    /// The engine directly, after perturbing the lattice by ± amplitude l0 (seeded).
+    PerturbedTank { amplitude: Real, seed: u64 },
+}
+
+/// One stress scene.
+#[derive(Debug, Clone)]
+pub struct StressRun {
+    pub name: String,
+    pub description: String,
+    pub case: Value,
+    pub kind: StressKind,
+}
+
+/// What a stress run did (one row of `stress.md`).
+#[derive(Debug, Clone, PartialEq)]
+pub struct StressOutcome {
+    pub name: String,
+    pub description: String,
+    pub status: String,
+    /// The engine's diagnosis of a failure (empty when completed).
+    pub reason: String,
+    pub end_time: Real,
+    pub final_time: Real,
+    pub steps: u64,
+    pub particles: usize,
+    pub wall_time_s: f64,
+    pub max_speed: Real,
+    /// Relative error of the mean tank load against the water weight over 10-20% of the run.
+    pub load_error_early: Real,
+    /// The same over the last 10% of the run.
+    pub load_error_late: Real,
+}
+
+// ---------------------------------------------------------------- pure parts
+
+/// A small seeded generator (SplitMix64): the same offsets on every machine.
+#[derive(Debug, Clone)]
+pub struct SplitMix64(u64);
+
+impl SplitMix64 {
+    pub fn new(seed: u64) -> Self {
+        Self(seed)
+    }
+    pub fn next_u64(&mut self) -> u64 {
+        self.0 = self.0.wrapping_add(0x9E37_79B9_7F4A_7C15);
+        let mut z = self.0;
+        z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
+        z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
+        z ^ (z >> 31)
+    }
+    /// Uniform in [-1, 1).
+    pub fn symmetric(&mut self) -> Real {
+        (self.next_u64() >> 11) as Real / (1u64 << 53) as Real * 2.0 - 1.0
+    }
+}
+
+/// Move every position by an independent uniform offset in [-amplitude, amplitude) per
+/// axis, from `seed`.
+pub fn perturb_positions(positions: &mut [Vec2], amplitude: Real, seed: u64) {
+    let mut rng = SplitMix64::new(seed);
+    for p in positions {
+        p.x += amplitude * rng.symmetric();
+        p.y += amplitude * rng.symmetric();
+    }
+}
+
+/// Time-weighted mean of interval means (`times[k]` ends the interval of `values[k]`,
+/// the first starting at `start`) over the intervals lying in [from, to].
+pub fn window_mean(
+    start: Real,
+    times: &[Real],
+    values: &[Real],
+    from: Real,
+    to: Real,
+) -> Option<Real> {
+    let (mut sum, mut span) = (0.0, 0.0);
+    let mut previous = start;
+    for (t, v) in times.iter().zip(values) {
+        if previous >= from - 1e-12 && *t <= to + 1e-12 {
+            sum += v * (t - previous);
+            span += t - previous;
+        }
+        previous = *t;
+    }
+    (span > 0.0).then(|| sum / span)
+}
+
+/// Relative errors of the mean load against `expected` over 10-20% and the last 10% of
+/// `[0, end]` (NaN where a window holds no interval).
+pub fn load_drift(times: &[Real], loads: &[Real], end: Real, expected: Real) -> (Real, Real) {
+    let err = |from: Real, to: Real| {
+        window_mean(0.0, times, loads, from, to).map_or(Real::NAN, |m| relative_error(m, expected))
+    };
+    (err(0.1 * end, 0.2 * end), err(0.9 * end, end))
+}
+
+/// First chine time of a body moving at constant velocity into a free surface at
+/// `surface` (the level across the motion; the keel starts `gap` above it): the time at
+/// which the water, rising at 2/π of the entry depth (Wagner), reaches the nearer of the
+/// two vertices next to the leading one. Returns (contact time, chine time after contact).
+pub fn chine_time(
+    polygon: &[[Real; 2]],
+    position: [Real; 2],
+    angle: Real,
+    velocity: [Real; 2],
+    surface: Real,
+) -> Option<(Real, Real)> {
+    let speed = (velocity[0].powi(2) + velocity[1].powi(2)).sqrt();
+    if polygon.len() < 3 || !(speed > 0.0) {
+        return None;
+    }
+    let d = [velocity[0] / speed, velocity[1] / speed];
+    let (s, c) = angle.sin_cos();
+    let along: Vec<Real> = polygon
+        .iter()
+        .map(|p| {
+            let x = position[0] + c * p[0] - s * p[1];
+            let y = position[1] + s * p[0] + c * p[1];
+            x * d[0] + y * d[1]
+        })
+        .collect();
+    let n = along.len();
+    let lead = (0..n).max_by(|&a, &b| along[a].total_cmp(&along[b]))?;
+    let h = [(lead + 1) % n, (lead + n - 1) % n]
+        .iter()
+        .map(|&k| along[lead] - along[k])
+        .fold(Real::INFINITY, Real::min);
+    // `surface` is the water level along -d (distance of the surface ahead of the keel)
+    let contact = ((surface - along[lead]) / speed).max(0.0);
+    (h > 0.0).then(|| (contact, 2.0 * h / (std::f64::consts::PI * speed)))
+}
+
+// ---------------------------------------------------------------- the runs
+
+fn cases_dir() -> std::path::PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("cases")
+}
+
+fn set(v: &mut Value, o: &str) -> io::Result<()> {
+    case::apply_override(v, o)
+        .map_err(|e| io::Error::new(io::ErrorKind::InvalidData, e.to_string()))
+}
+
+fn parse(v: Value) -> io::Result<Case> {
+    case::parse_case_value(v).map_err(|e| io::Error::new(io::ErrorKind::InvalidData, e.to_string()))
+}
+
+/// The wedge case at `speed` (m/s, downwards), heel `angle` (rad), spacing `l0`, ending
+/// at its first chine time. A `scheme.max_speed` of the base case is scaled with the
+/// speed (the jet tip of a 30° wedge runs at about 5 V, physically: an absolute limit
+/// set for the base speed would stop a faster entry for a physical jet).
+pub fn wedge_case(base: &Value, speed: Real, angle: Real, l0: Real) -> io::Result<Value> {
+    let mut v = base.clone();
+    let base_case = parse(base.clone())?;
+    let base_speed = base_case.bodies.first().and_then(|b| match &b.motion {
+        Motion::Prescribed { velocity, .. } => {
+            Some((velocity[0].powi(2) + velocity[1].powi(2)).sqrt())
+        }
+        _ => None,
+    });
+    if let (Some(limit), Some(v0)) = (base_case.scheme.max_speed, base_speed) {
+        if v0 > 0.0 {
+            set(&mut v, &format!("scheme.max_speed={}", limit * speed / v0))?;
+        }
+    }
+    set(
+        &mut v,
+        &format!("bodies.0.motion.velocity=[0.0,{}]", -speed),
+    )?;
+    set(&mut v, &format!("bodies.0.angle={angle}"))?;
+    set(&mut v, &format!("particle_spacing={l0}"))?;
+    let case = parse(v.clone())?;
+    let body = case
+        .bodies
+        .first()
+        .ok_or_else(|| io::Error::other("the wedge case has no body"))?;
+    let Motion::Prescribed { velocity, .. } = &body.motion else {
+        return Err(io::Error::other("the wedge case needs a prescribed motion"));
+    };
+    let d = {
+        let s = (velocity[0].powi(2) + velocity[1].powi(2)).sqrt();
+        [velocity[0] / s, velocity[1] / s]
+    };
+    // the free surface: the fluid furthest against the motion
+    let surface = case
+        .fluid_blocks
+        .iter()
+        .flat_map(|b| b.polygon.iter().map(|p| p[0] * d[0] + p[1] * d[1]))
+        .fold(Real::INFINITY, Real::min);
+    let (contact, t_chine) =
+        chine_time(&body.polygon, body.position, body.angle, *velocity, surface)
+            .ok_or_else(|| io::Error::other("no chine time"))?;
+    set(&mut v, &format!("time.end={}", contact + t_chine))?;
+    // loads at 50 rows over the run, no snapshots
+    set(
+        &mut v,
+        &format!("output.load_interval={}", (contact + t_chine) / 50.0),
+    )?;
+    set(&mut v, "output.snapshot_interval=null")?;
+    Ok(v)
+}
+
+/// The stress scenes (shorter or coarser in the quick form).
+pub fn stress_runs(quick: bool) -> io::Result<Vec<StressRun>> {
+    let mut runs = Vec::new();
+    // dam break to 5 s
+    let dam_path = cases_dir().join("dam_break.json");
+    let mut dam = if dam_path.exists() {
+        super::read_case_value(&dam_path)?
+    } else {
+        super::dam_break_case(super::reference::KOSHIZUKA_OKA_COLUMN_WIDTH)
+    };
+    let a = super::reference::KOSHIZUKA_OKA_COLUMN_WIDTH;
+    let dam_end = if quick { 2.0 } else { 5.0 };
+    let per_width = if quick { 10 } else { 40 };
+    set(
+        &mut dam,
+        &format!("particle_spacing={}", a / per_width as Real),
+    )?;
+    set(&mut dam, &format!("time.end={dam_end}"))?;
+    set(&mut dam, "output.load_interval=0.01")?;
+    set(&mut dam, "output.snapshot_interval=null")?;
+    runs.push(StressRun {
+        name: "dam_break_long".into(),
+        description: format!(
+            "Koshizuka & Oka dam break to {dam_end} s at l0 = a/{per_width} (far-wall impact, overturning wave)"
+        ),
+        case: dam,
+        kind: StressKind::Plain,
+    });
+    // wedges
+    let wedge_path = cases_dir().join("wedge_30deg_constant_velocity.json");
+    if wedge_path.exists() {
+        let base = super::read_case_value(&wedge_path)?;
+        let l0 = if quick { 0.02 } else { 0.01 };
+        for speed in [20.0, 30.0] {
+            runs.push(StressRun {
+                name: format!("wedge_{speed:.0}ms"),
+                description: format!(
+                    "30° wedge at constant {speed} m/s, l0 = {} mm, to the chine time (the case's speed limit scaled with V)",
+                    l0 * 1e3
+                ),
+                case: wedge_case(&base, speed, 0.0, l0)?,
+                kind: StressKind::Plain,
+            });
+        }
+        let base_speed = parse(base.clone())?
+            .bodies
+            .first()
+            .and_then(|b| match &b.motion {
+                Motion::Prescribed { velocity, .. } => {
+                    Some((velocity[0].powi(2) + velocity[1].powi(2)).sqrt())
+                }
+                _ => None,
+            })
+            .unwrap_or(6.15);
+        runs.push(StressRun {
+            name: "wedge_heel_10deg".into(),
+            description: format!(
+                "30° wedge heeled 10° (deadrise 20°/40°) at {base_speed} m/s, l0 = {} mm, to the first chine time",
+                l0 * 1e3
+            ),
+            case: wedge_case(&base, base_speed, 10f64.to_radians(), l0)?,
+            kind: StressKind::Plain,
+        });
+    }
+    // still tanks
+    let tank_path = cases_dir().join("hydrostatic.json");
+    if tank_path.exists() {
+        let base = super::read_case_value(&tank_path)?;
+        let mut perturbed = base.clone();
+        let end = if quick { 0.5 } else { 2.0 };
+        set(&mut perturbed, &format!("time.end={end}"))?;
+        runs.push(StressRun {
+            name: "perturbed_lattice".into(),
+            description: format!(
+                "hydrostatic tank, fluid lattice perturbed by uniform ±{PERTURBATION} l0 per axis (seed {PERTURBATION_SEED}), to {end} s"
+            ),
+            case: perturbed,
+            kind: StressKind::PerturbedTank {
+                amplitude: PERTURBATION,
+                seed: PERTURBATION_SEED,
+            },
+        });
+        let mut long = base;
+        let end = if quick { 2.0 } else { 20.0 };
+        set(&mut long, &format!("time.end={end}"))?;
+        set(&mut long, "output.snapshot_interval=null")?;
+        runs.push(StressRun {
+            name: "hydrostatic_long".into(),
+            description: format!("hydrostatic tank to {end} s"),
+            case: long,
+            kind: StressKind::StillTank,
+        });
+    }
+    Ok(runs)
+}
+
+fn status_text(s: RunStatus) -> String {
+    match s {
+        RunStatus::Succeeded => "completed",
+        RunStatus::Failed => "failed",
+        RunStatus::Cancelled => "cancelled",
+    }
+    .into()
+}
+
+fn water_weight(case: &Case, particles: usize) -> Real {
+    particles as Real * case.fluid.density * case.particle_spacing.powi(2) * case.fluid.gravity[1]
+}
+
+/// Run one stress scene into `dir`. Never panics.
+pub fn run_stress(run: &StressRun, dir: &Path) -> StressOutcome {
+    let mut out = StressOutcome {
+        name: run.name.clone(),
+        description: run.description.clone(),
+        status: "failed".into(),
+        reason: String::new(),
+        end_time: Real::NAN,
+        final_time: 0.0,
+        steps: 0,
+        particles: 0,
+        wall_time_s: f64::NAN,
+        max_speed: Real::NAN,
+        load_error_early: Real::NAN,
+        load_error_late: Real::NAN,
+    };
+    let case = match parse(run.case.clone()) {
+        Ok(c) => c,
+        Err(e) => {
+            out.reason = format!("case rejected: {e}");
+            return out;
+        }
+    };
+    out.end_time = case.time.end;
+    let started = Instant::now();
+    let outcome = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| match &run.kind {
+        StressKind::Plain | StressKind::StillTank => {
+            let summary = run::run_case(&case, dir, &mut run::Quiet).map_err(|e| e.to_string())?;
+            let mut o = out.clone();
+            o.status = status_text(summary.status);
+            o.reason = summary.reason.clone().unwrap_or_default();
+            o.final_time = summary.simulated_time;
+            o.steps = summary.steps;
+            o.particles = summary.particles;
+            o.wall_time_s = summary.wall_time_s;
+            o.max_speed = summary.max_velocity;
+            if run.kind == StressKind::StillTank {
+                let wall = case
+                    .walls
+                    .first()
+                    .map(|w| w.name.clone())
+                    .unwrap_or_default();
+                let text =
+                    std::fs::read_to_string(dir.join("loads.csv")).map_err(|e| e.to_string())?;
+                let rows = parse_loads_csv(&text).map_err(|e| e.to_string())?;
+                let (t, fy): (Vec<Real>, Vec<Real>) = rows
+                    .iter()
+                    .filter(|r| r.body == wall)
+                    .map(|r| (r.time, r.fy))
+                    .unzip();
+                let (early, late) = load_drift(
+                    &t,
+                    &fy,
+                    summary.simulated_time,
+                    water_weight(&case, summary.particles),
+                );
+                o.load_error_early = early;
+                o.load_error_late = late;
+            }
+            Ok::<StressOutcome, String>(o)
+        }
+        StressKind::PerturbedTank { amplitude, seed } => {
+            Ok(perturbed_tank(&case, *amplitude, *seed, out.clone()))
+        }
+    }));
+    match outcome {
+        Ok(Ok(mut o)) => {
+            if !o.wall_time_s.is_finite() {
+                o.wall_time_s = started.elapsed().as_secs_f64();
+            }
+            o
+        }
+        Ok(Err(e)) => {
+            out.reason = format!("run error: {e}");
+            out.wall_time_s = started.elapsed().as_secs_f64();
+            out
+        }
+        Err(p) => {
+            let what = p
+                .downcast_ref::<String>()
+                .cloned()
+                .or_else(|| p.downcast_ref::<&str>().map(|s| s.to_string()))
+                .unwrap_or_default();
+            out.reason = format!("panicked: {what}");
+            out.wall_time_s = started.elapsed().as_secs_f64();
+            out
+        }
+    }
+}
+
+/// The engine's own loop (as in `run::run_case`, without bodies or writer) on a
+/// perturbed lattice; the tank load is recorded every step.
+fn perturbed_tank(
+    case: &Case,
+    amplitude: Real,
+    seed: u64,
+    mut out: StressOutcome,
+) -> StressOutcome {
+    if let Err(e) = case::validate(case, &case::Limits::default()) {
+        out.reason = format!("case rejected: {e}");
+        return out;
+    }
+    let started = Instant::now();
+    let mut sim = Simulation::new(case);
+    perturb_positions(
+        &mut sim.particles.position,
+        amplitude * case.particle_spacing,
+        seed,
+    );
+    // neighbours, wall contacts and number densities of the moved particles
+    sim.initialize();
+    let tank = 0;
+    let end = case.time.end;
+    let (mut times, mut loads) = (Vec::new(), Vec::new());
+    let mut max_speed: Real = 0.0;
+    let mut failure = None;
+    while sim.time < end * (1.0 - 1e-12) {
+        let mut dt = sim.next_dt();
+        if sim.time + dt > end {
+            dt = (end - sim.time).max(1e-12);
+        }
+        match sim.step(dt) {
+            Ok(info) => {
+                max_speed = max_speed.max(info.max_speed);
+                if let Some(l) = sim.loads.get(tank) {
+                    times.push(sim.time);
+                    loads.push(l.force.y);
+                }
+            }
+            Err(e) => {
+                failure = Some(e.to_string());
+                break;
+            }
+        }
+    }
+    out.status = if failure.is_some() {
+        "failed"
+    } else {
+        "completed"
+    }
+    .into();
+    out.reason = failure.unwrap_or_default();
+    out.final_time = sim.time;
+    out.steps = sim.steps;
+    out.particles = sim.particle_count();
+    out.wall_time_s = started.elapsed().as_secs_f64();
+    out.max_speed = max_speed;
+    let (early, late) = load_drift(
+        &times,
+        &loads,
+        sim.time,
+        water_weight(case, sim.particle_count()),
+    );
+    out.load_error_early = early;
+    out.load_error_late = late;
+    out
+}
+
+fn pct(x: Real) -> String {
+    if x.is_finite() {
+        format!("{:.2}%", 100.0 * x)
+    } else {
+        "—".into()
+    }
+}
+
+/// The table of stress outcomes (markdown, with a header line).
+pub fn stress_table(rows: &[StressOutcome]) -> String {
+    let mut md = String::from(
+        "| run | status | t reached / end (s) | steps | particles | wall (s) | max speed (m/s) | load error 10-20% | load error last 10% | diagnosis |\n\
+         | --- | --- | ---: | ---: | ---: | ---: | ---: | ---: | ---: | --- |\n",
+    );
+    for r in rows {
+        let _ = writeln!(
+            md,
+            "| {} | {} | {:.4} / {:.4} | {} | {} | {:.1} | {} | {} | {} | {} |",
+            r.name,
+            r.status,
+            r.final_time,
+            r.end_time,
+            r.steps,
+            r.particles,
+            r.wall_time_s,
+            if r.max_speed.is_finite() {
+                format!("{:.3}", r.max_speed)
+            } else {
+                "—".into()
+            },
+            pct(r.load_error_early),
+            pct(r.load_error_late),
+            r.reason.replace('|', "/")
+        );
+    }
+    md
+}
+
+/// `stress.md`: the scenes, the table, the CFL sweep table when given.
+pub fn stress_markdown(
+    rows: &[StressOutcome],
+    cfl: &[super::report::StressRow],
+    quick: bool,
+) -> String {
+    let mut md = String::from("# mpsfsi stress runs\n\n");
+    let _ = writeln!(
+        md,
+        "Mode: {}. Default scheme. A failed run is a result: its row gives the time reached and the engine's diagnosis. \
+         Load error: mean vertical tank load against the water weight (particles × rho l0² g) over the window; \
+         max speed: the largest particle speed over the run.\n",
+        if quick { "quick (shorter, coarser)" } else { "full" }
+    );
+    for r in rows {
+        let _ = writeln!(md, "- `{}`: {}", r.name, r.description);
+    }
+    md.push('\n');
+    md.push_str(&stress_table(rows));
+    let failed: Vec<&str> = rows
+        .iter()
+        .filter(|r| r.status != "completed")
+        .map(|r| r.name.as_str())
+        .collect();
+    let _ = writeln!(
+        md,
+        "\n- {} of {} runs completed{}.",
+        rows.len() - failed.len(),
+        rows.len(),
+        if failed.is_empty() {
+            String::new()
+        } else {
+            format!("; not completed: {}", failed.join(", "))
+        }
+    );
+    if !cfl.is_empty() {
+        let _ = writeln!(md, "\n## CFL sweep of the dam break\n");
+        let _ = writeln!(
+            md,
+            "| variant | CFL | completed | error | note |\n| --- | ---: | --- | ---: | --- |"
+        );
+        for s in cfl {
+            let _ = writeln!(
+                md,
+                "| {} | {} | {} | {} | {} |",
+                s.variant,
+                s.cfl,
+                s.completed,
+                pct(s.error),
+                s.note.replace('|', "/")
+            );
+        }
+    }
+    md
+}
+
+/// Run every stress scene into `dir/<name>` and return the outcomes.
+pub fn run_all(quick: bool, dir: &Path) -> io::Result<Vec<StressOutcome>> {
+    let mut rows = Vec::new();
+    for run in stress_runs(quick)? {
+        let o = run_stress(&run, &dir.join(&run.name));
+        eprintln!(
+            "stress {:<18} {:<9} t = {:.4}/{:.4} s  {} steps  {:.1} s  max speed {:.3}  load error {} -> {}  {}",
+            o.name,
+            o.status,
+            o.final_time,
+            o.end_time,
+            o.steps,
+            o.wall_time_s,
+            o.max_speed,
+            pct(o.load_error_early),
+            pct(o.load_error_late),
+            o.reason
+        );
+        rows.push(o);
+    }
+    Ok(rows)
+}
