@@ -980,22 +980,18 @@ pub fn feature_rows(
     samples: &[FeatureSample],
     bare: &str,
 ) -> Vec<FeatureRow> {
-    let times = |name: &str| -> Vec<f64> {
+    // one measured field (wall or CPU ms/step) of a variant's successful samples
+    let field = |name: &str, of: fn(&FeatureSample) -> f64| -> Vec<f64> {
         samples
             .iter()
             .filter(|s| s.variant == name && s.status == "succeeded")
-            .map(|s| s.ms_per_step)
+            .map(of)
             .collect()
     };
+    let times = |name: &str| field(name, |s| s.ms_per_step);
+    let cpu_times = |name: &str| field(name, |s| s.cpu_ms_per_step);
     let bare_times = times(bare);
     let bare_median = median(&bare_times).unwrap_or(f64::NAN);
-    let cpu_times = |name: &str| -> Vec<f64> {
-        samples
-            .iter()
-            .filter(|s| s.variant == name && s.status == "succeeded")
-            .map(|s| s.cpu_ms_per_step)
-            .collect()
-    };
     let bare_cpu = cpu_times(bare);
     let bare_cpu_median = median(&bare_cpu).unwrap_or(f64::NAN);
     variants
