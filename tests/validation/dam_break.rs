@@ -11,24 +11,9 @@
 use super::shipped_case;
 use mpsfsi::engine::Simulation;
 
-/// (T, Z) of Martin & Moyce (1952), n² = 2, from references.md.
-const MARTIN_MOYCE: [(f64, f64); 15] = [
-    (0.41, 1.11),
-    (0.84, 1.22),
-    (1.19, 1.44),
-    (1.43, 1.67),
-    (1.63, 1.89),
-    (1.83, 2.11),
-    (1.98, 2.33),
-    (2.20, 2.56),
-    (2.32, 2.78),
-    (2.51, 3.00),
-    (2.65, 3.22),
-    (2.83, 3.44),
-    (2.98, 3.67),
-    (3.11, 3.89),
-    (3.33, 4.11),
-];
+/// (T, Z) of Martin & Moyce (1952), n² = 2, from references.md (one table for the
+/// benchmark and this test).
+use mpsfsi::bench::reference::MARTIN_MOYCE_SURGE as MARTIN_MOYCE;
 
 #[test]
 fn surge_front_follows_martin_and_moyce() {
