@@ -7,10 +7,17 @@
 //! at the experimental speed. This test therefore asserts (a) the front speed
 //! dZ/dT over 1.19 <= T <= 2.83 within 10% of Martin & Moyce's, and (b) the position
 //! within 25% for 1 <= T <= 3 — looser than the 10% target, which is NOT met.
+//!
+//! The same run also follows Martin & Moyce's second measurement, the residual column
+//! height at the back wall, which the gate release and the bottom friction barely touch:
+//! measured within 0.2-5.2% over 0.56 <= t sqrt(g/a) <= 2.0 (largest at 1.84), asserted within 6%. The
+//! bulk of the collapse is right; the disagreement is at the tip of the surge.
 
 use super::shipped_case;
 use mpsfsi::engine::Simulation;
 
+/// (t sqrt(g/a), H/(2a)) of the residual column, from references.md.
+use mpsfsi::bench::reference::MARTIN_MOYCE_COLUMN;
 /// (T, Z) of Martin & Moyce (1952), n² = 2, from references.md (one table for the
 /// benchmark and this test).
 use mpsfsi::bench::reference::MARTIN_MOYCE_SURGE as MARTIN_MOYCE;
@@ -21,12 +28,27 @@ fn surge_front_follows_martin_and_moyce() {
     let a: f64 = 0.146;
     let g: f64 = 9.81;
     let mut sim = Simulation::new(&case);
+    let l0 = case.particle_spacing;
     let mut front = Vec::new(); // (T, Z) at the reference times
-    let mut k = 0;
+    let mut column = Vec::new(); // (t sqrt(g/a), H/2a, reference)
+    let (mut k, mut kc) = (0, 0);
     while sim.time < case.time.end && k < MARTIN_MOYCE.len() {
         let dt = sim.next_dt();
         sim.step(dt)
             .unwrap_or_else(|e| panic!("dam break failed: {e}"));
+        let tc = sim.time * (g / a).sqrt();
+        if kc < MARTIN_MOYCE_COLUMN.len() && tc >= MARTIN_MOYCE_COLUMN[kc].0 {
+            // the column at the back wall: highest particle within 2 l0 of it
+            let h = sim
+                .particles
+                .position
+                .iter()
+                .filter(|p| p.x < 2.0 * l0)
+                .map(|p| p.y)
+                .fold(0.0, f64::max);
+            column.push((tc, h / (2.0 * a), MARTIN_MOYCE_COLUMN[kc].1));
+            kc += 1;
+        }
         let t = sim.time * (2.0 * g / a).sqrt();
         if t >= MARTIN_MOYCE[k].0 {
             let x = sim
@@ -39,6 +61,17 @@ fn surge_front_follows_martin_and_moyce() {
             k += 1;
         }
     }
+    println!("residual column (t*, H/2a, Martin & Moyce): {column:.3?}");
+    assert!(column.len() >= 9, "column reached t* = {:?}", column.last());
+    for (t, h, h_ref) in &column {
+        let err = h / h_ref - 1.0;
+        assert!(
+            err.abs() < 0.06,
+            "t sqrt(g/a) = {t:.2}: H/2a = {h:.3} vs {h_ref} ({:+.1}%)",
+            100.0 * err
+        );
+    }
+    println!("surge front (T, Z, Martin & Moyce): {front:.3?}");
     let in_window: Vec<_> = front
         .iter()
         .filter(|(t, _, _)| (1.0..=3.0).contains(t))
