@@ -127,6 +127,19 @@ pub enum SpacingControl {
     Collision,
 }
 
+/// How the load on a wall object is measured.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize, JsonSchema, Default)]
+#[serde(rename_all = "snake_case")]
+pub enum WallLoadKind {
+    /// The reaction of the wall terms on the fluid: Σ (m/rho) (p_i + p_k) r w / r² over
+    /// the virtual wall points, plus the repulsion safety net and wall viscosity.
+    #[default]
+    Reaction,
+    /// The pressure interpolated onto points along the surface and integrated,
+    /// F = -∫ p n ds (engine::walls::pressure_load), plus wall viscosity.
+    PressureIntegral,
+}
+
 /// All numerical choices. Lengths are ratios of the particle spacing l0.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize, JsonSchema)]
 #[serde(default, deny_unknown_fields)]
@@ -177,6 +190,8 @@ pub struct Scheme {
     /// disorder) with ghosts carrying the hydrostatic pressure p_i + rho g·r, so still
     /// water is an exact discrete solution.
     pub hydrostatic_ghosts: bool,
+    /// How wall and body loads are measured.
+    pub wall_load: WallLoadKind,
     /// A run fails when a particle exceeds this speed (m/s); null: automatic from the scene.
     pub max_speed: Option<f64>,
 }
@@ -207,6 +222,7 @@ impl Default for Scheme {
             wall_repulsion_distance: 0.5,
             shifting: 0.0,
             hydrostatic_ghosts: true,
+            wall_load: WallLoadKind::default(),
             max_speed: None,
         }
     }

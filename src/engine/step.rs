@@ -24,8 +24,9 @@ use super::neighbors::NeighborList;
 use super::operators::{gradient_row, laplacian_row, Cloud, LatticeConstants, Normalisation};
 use super::pressure::{self, CsrMatrix, SolveParams};
 use super::simulation::{SimError, Simulation, StepInfo, WallLoad};
+use super::walls::pressure_load::pressure_loads;
 use super::walls::{moment_about, PlacedWall, WallContacts, WallKernels, WallWeights};
-use crate::case::{GradientKind, LaplacianKind, SourceKind, SpacingControl};
+use crate::case::{GradientKind, LaplacianKind, SourceKind, SpacingControl, WallLoadKind};
 use crate::with_kernel;
 use rayon::prelude::*;
 use std::marker::PhantomData;
@@ -113,8 +114,9 @@ fn seconds(t: &mut Instant) -> f64 {
 }
 
 impl Simulation {
-    /// Neighbours, wall contacts, number density and divergence of the initial state.
-    pub(crate) fn initialize(&mut self) {
+    /// Neighbours, wall contacts, number density and divergence of the current state: call
+    /// it after moving particles by hand (as the perturbed-lattice stress scene does).
+    pub fn initialize(&mut self) {
         with_kernel!(self.scheme.kernel, K => initialize::<K>(self))
     }
 
@@ -196,8 +198,12 @@ fn step<K: Kernel>(sim: &mut Simulation, dt: Real) -> Result<StepInfo, SimError>
 
     // n and ∇·u at the end of the step, for the error-compensating source
     update_number_density_and_divergence::<K>(sim);
+    let with_repulsion = sim.scheme.wall_load == WallLoadKind::Reaction;
     for load in &mut loads {
-        load.force = load.pressure_force + load.repulsion_force + load.viscous_force;
+        load.force = load.pressure_force + load.viscous_force;
+        if with_repulsion {
+            load.force += load.repulsion_force;
+        }
     }
     sim.loads = loads;
     for wall in &mut sim.walls {
@@ -393,7 +399,7 @@ fn detect_free_surface<K: Kernel>(sim: &mut Simulation) {
                 return (false, 0.0);
             }
             let value = if offset && m.norm() > 0.0 {
-                (rho_g.dot(&(m / m.norm())) * 0.5 * l0).max(0.0)
+                surface_value(rho_g, m / m.norm(), l0)
             } else {
                 0.0
             };
@@ -402,6 +408,27 @@ fn detect_free_surface<K: Kernel>(sim: &mut Simulation) {
         .collect();
     sim.particles.free_surface = flags.iter().map(|f| f.0).collect();
     sim.scratch.surface_pressure = flags.iter().map(|f| f.1).collect();
+}
+
+/// Below this tilt of the surface normal from the vertical, a free surface counts as level.
+const LEVEL_SURFACE_COS: Real = 0.866_025_403_784_438_6; // cos 30°
+
+/// Dirichlet value of a free-surface particle with inward normal `m_hat`: the hydrostatic
+/// pressure half a spacing below the surface, rho |g| (l0/2) cos(tilt), taken as level
+/// (cos = 1) up to a 30° tilt and falling linearly in cos beyond. Why flat: the normal of
+/// a particle near a wall or a slightly displaced neighbour tilts by a few degrees, and a
+/// value that follows it feeds the particle positions back into the surface pressure.
+/// Measured on the still tank: with the plain rho g·m̂ l0/2 the top-row particles next to
+/// the side walls took 48.9 Pa instead of 49.05, which drove a slow flow up the walls and
+/// a particle-scale mode that grew from 2 s on (max speed 19 mm/s at 2.5 s, 0.46 m/s at
+/// 4 s); with the level value the tank stays on the lattice.
+fn surface_value(rho_g: Vec2, m_hat: Vec2, l0: Real) -> Real {
+    let weight = rho_g.norm();
+    if weight == 0.0 {
+        return 0.0;
+    }
+    let cos = rho_g.dot(&m_hat) / weight;
+    weight * 0.5 * l0 * (cos / LEVEL_SURFACE_COS).clamp(0.0, 1.0)
 }
 
 /// The extrapolation gradient c = rho (g - a_w) of every wall contact (module docs);
@@ -740,10 +767,29 @@ fn correct_velocity_and_position<K: Kernel>(
             }
         })
         .collect();
+    if sim.scheme.wall_load == WallLoadKind::PressureIntegral {
+        let w = |d: Real| K::w(d, re);
+        let integral = pressure_loads(
+            x,
+            p,
+            &nb.grid,
+            walls,
+            &w,
+            rho,
+            vec2(prm.gravity),
+            prm.l0,
+            re,
+        );
+        for (load, (f, moment)) in loads.iter_mut().zip(integral) {
+            load.pressure_force += f;
+            load.moment += moment;
+        }
+    }
     // Loads: the conservative (antisymmetric) wall term, virtual pressure p_k = p_i + c·r:
     // Σ_k (p_i + p_k) r w / r² — a pressure integral over the wall through the MPS wall
     // operator, whose sum over a still tank is the fluid's weight.
-    for i in 0..n {
+    let reaction = sim.scheme.wall_load == WallLoadKind::Reaction;
+    for i in (0..n).filter(|_| reaction) {
         let base = contacts.offsets[i] as usize;
         for (k, c) in contacts.of(i).iter().enumerate() {
             let gw = (c.terms.moment1 * (2.0 * p[i]) + c.terms.moment2_times(neumann[base + k]))
@@ -814,6 +860,8 @@ fn keep_particles_apart(
         }
     }
     let rw = sim.scheme.wall_repulsion_distance * l0;
+    // the pressure-integral load leaves the safety net out (its share is reported apart)
+    let reaction = sim.scheme.wall_load == WallLoadKind::Reaction;
     if rw > 0.0 {
         for i in 0..n {
             for c in sim.contacts.of(i) {
@@ -836,8 +884,10 @@ fn keep_particles_apart(
                 let f = -du * (m / dt);
                 let load = &mut loads[c.object as usize];
                 load.repulsion_force += f;
-                load.moment +=
-                    moment_about(walls[c.object as usize].state.center_of_mass, c.point, f);
+                if reaction {
+                    load.moment +=
+                        moment_about(walls[c.object as usize].state.center_of_mass, c.point, f);
+                }
             }
         }
     }

@@ -6,4 +6,5 @@ mod determinism;
 mod kernels;
 mod lattice;
 mod neighbors;
+mod wall_pressure;
 mod walls;

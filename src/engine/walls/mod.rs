@@ -15,6 +15,7 @@
 //! wall adds no unknowns to the pressure equation; see `pressure`.
 
 pub mod geometry;
+pub mod pressure_load;
 
 use crate::engine::math::{cross, perp, Real, Vec2};
 use geometry::{closest_on_segment, inside, signed_distance, WallShape};
