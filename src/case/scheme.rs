@@ -139,6 +139,11 @@ pub struct Scheme {
     /// Relative residual at which the linear solver stops.
     pub solver_tolerance: f64,
     pub solver_max_iterations: usize,
+    /// pcg_amg only: steps one AMG hierarchy preconditions before it is rebuilt (1:
+    /// rebuilt every step). In between, the hierarchy of an earlier step is fitted to
+    /// the new matrix (engine::pressure::reuse); it is rebuilt sooner when the
+    /// iterations grow by half. The solution keeps the solver tolerance either way.
+    pub amg_rebuild_interval: usize,
     /// Influence radius r_e/l0 of PND, gradient and source.
     pub radius: f64,
     /// Influence radius r_e/l0 of the Laplacian; null: `radius` (3.1 for the classic Laplacian).
@@ -191,6 +196,7 @@ impl Default for Scheme {
             solver: SolverKind::default(),
             solver_tolerance: 1.0e-8,
             solver_max_iterations: 2000,
+            amg_rebuild_interval: 10,
             radius: 2.1,
             laplacian_radius: None,
             surface_threshold: 0.97,
