@@ -115,6 +115,8 @@ impl SolverCache {
     }
 
     fn build(&mut self, a: &CsrMatrix, keys: &[u32], key_space: usize) {
+        // the old hierarchy goes first: two alive at once would raise the memory peak
+        self.hierarchy = None;
         self.hierarchy = Some(Hierarchy::new(a));
         self.keys.clear();
         self.keys.extend_from_slice(keys);
