@@ -39,8 +39,11 @@ pub enum CoarseUpdate {
     /// Keep the coarse operators of the last rebuild (setup of a reused solve: the
     /// fine smoother and, when the unknowns changed, the remapped transfers).
     Keep,
-    /// Recompute them as Galerkin products of the new matrix with the kept transfers
-    /// (saves the aggregation and the prolongator smoothing, about a quarter of a build).
+    /// Recompute them as Galerkin products of the new matrix with the kept transfers.
+    /// Not the engine's choice: it saves only the aggregation and the prolongator
+    /// smoothing, about a quarter of a build (the products are the rest), and with
+    /// many unknowns joining and leaving it took more iterations than `Keep` (32 against
+    /// 22, fresh 19, in tests/engine/amg_reuse.rs).
     Galerkin,
 }
 
