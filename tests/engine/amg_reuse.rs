@@ -318,3 +318,46 @@ fn a_failed_reused_solve_is_repeated_with_a_new_hierarchy() {
     assert_eq!(counts.failed_reuses, 1, "{counts:?}");
     assert_eq!(counts.builds, 2, "{counts:?}");
 }
+
+/// The engine with reuse (default interval) and with a rebuild every step: the dam
+/// break's wall loads agree to the solver tolerance's effect, and hierarchies were
+/// reused.
+#[test]
+fn engine_with_reuse_matches_rebuilding_every_step() {
+    use mpsfsi::case::load_case_file;
+    use mpsfsi::engine::Simulation;
+    let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("cases/dam_break.json");
+    let run = |interval: usize| {
+        let overrides = [
+            format!("scheme.amg_rebuild_interval={interval}"),
+            "particle_spacing=0.005".to_string(),
+        ];
+        let case = load_case_file(&path, &overrides).unwrap();
+        let mut sim = Simulation::new(&case);
+        let mut loads = Vec::new();
+        for _ in 0..60 {
+            let dt = sim.next_dt();
+            sim.step(dt).unwrap();
+            loads.push(
+                sim.loads
+                    .iter()
+                    .map(|l| l.force.x.abs() + l.force.y.abs())
+                    .sum::<f64>(),
+            );
+        }
+        (
+            loads,
+            sim.solver_reuse_counts(),
+            sim.total_solver_iterations,
+        )
+    };
+    let (every, counts_every, its_every) = run(1);
+    let (reused, counts, its) = run(10);
+    eprintln!("iterations {its} reusing ({counts:?}) vs {its_every} rebuilding every step");
+    assert_eq!(counts_every.reuses, 0);
+    assert!(counts.reuses >= 40, "{counts:?}");
+    assert!(its <= its_every + its_every / 2, "{its} vs {its_every}");
+    for (a, b) in reused.iter().zip(&every) {
+        assert!((a - b).abs() <= 1e-5 * b.abs().max(1.0), "{a} vs {b}");
+    }
+}
