@@ -103,7 +103,8 @@ pub enum SolverKind {
     /// 10k, 40k, 160k particles) and its triangular solves run on one thread.
     PcgIc0,
     /// Conjugate gradient with a smoothed-aggregation algebraic multigrid V-cycle
-    /// (engine::pressure::amg), rebuilt every step. Measured on the hydrostatic tank (30
+    /// (engine::pressure::amg), rebuilt every `amg_rebuild_interval` steps and reused in
+    /// between (engine::pressure::reuse). Measured with a rebuild every step on the hydrostatic tank (30
     /// steps from rest, 2 threads, loaded 2-core machine): 7, 7, 15 iterations at 10k,
     /// 40k, 160k particles; whole step 1.3x, 1.9x, 3x faster than IC(0); the setup is
     /// about half of the solve. At 5k particles the two are level, at 1.2k IC(0) is

@@ -1,7 +1,8 @@
 //! Smoothed-aggregation algebraic multigrid (Vaněk, Mandel & Brezina 1996) as a
 //! preconditioner for conjugate gradients on the pressure Poisson matrix.
 //!
-//! Setup (rebuilt every solve, since the particles move): greedy aggregation of strongly
+//! Setup (from scratch every few steps, since the particles move; in between the
+//! hierarchy is reused, see [`super::reuse`]): greedy aggregation of strongly
 //! connected unknowns, the piecewise-constant tentative prolongator smoothed by one damped
 //! Jacobi step, P = (I - ω D⁻¹A) P₀, Galerkin coarse operators A_c = Pᵀ A P, down to a
 //! small level that is factorised densely (Cholesky). Application: one symmetric V(1,1)
@@ -377,30 +378,39 @@ impl Coarsest {
 }
 
 fn diagonal(a: &CsrMatrix) -> Vec<Real> {
-    (0..a.n)
-        .map(|i| {
-            (a.row_ptr[i]..a.row_ptr[i + 1])
-                .filter(|&k| a.col[k] as usize == i)
-                .map(|k| a.val[k])
-                .sum::<Real>()
-        })
-        .collect()
+    let mut d = vec![0.0; a.n];
+    // each entry from its own row, in column order: deterministic in parallel
+    for_rows(&mut d, |i, di| {
+        *di = (a.row_ptr[i]..a.row_ptr[i + 1])
+            .filter(|&k| a.col[k] as usize == i)
+            .map(|k| a.val[k])
+            .sum::<Real>()
+    });
+    d
 }
 
 /// Gershgorin bound of the spectral radius of D⁻¹A (2 for the fine Laplacian).
 fn jacobi_radius(a: &CsrMatrix, diag: &[Real]) -> Real {
-    (0..a.n)
-        .map(|i| {
-            let s: Real = (a.row_ptr[i]..a.row_ptr[i + 1])
-                .map(|k| a.val[k].abs())
-                .sum();
-            if diag[i] > 0.0 {
-                s / diag[i]
-            } else {
-                1.0
-            }
-        })
-        .fold(1.0, Real::max)
+    let row = |i: usize| {
+        let s: Real = (a.row_ptr[i]..a.row_ptr[i + 1])
+            .map(|k| a.val[k].abs())
+            .sum();
+        if diag[i] > 0.0 {
+            s / diag[i]
+        } else {
+            1.0
+        }
+    };
+    // a maximum does not depend on the order of the reduction: deterministic
+    if a.n < PARALLEL_ROWS {
+        (0..a.n).map(row).fold(1.0, Real::max)
+    } else {
+        (0..a.n)
+            .into_par_iter()
+            .with_min_len(1024)
+            .map(row)
+            .reduce(|| 1.0, Real::max)
+    }
 }
 
 /// ω/a_ii with ω = 4/(3ρ): damped Jacobi, convergent for SPD A (ω ρ < 2).
