@@ -24,7 +24,7 @@ fn main() {
     let s = steps as f64;
     let weight = n as f64 * case.fluid.density * case.particle_spacing.powi(2) * 9.81;
     println!(
-        "{:?} threads {} particles {} ms/step {:.1} solve ms/step {:.1} ({:.0}%) setup ms/step {:.1} ({:.0}% of solve) iters/step {:.1} particle-steps/s {:.3e} load/weight {:.4}",
+        "{:?} threads {} particles {} ms/step {:.1} solve ms/step {:.1} ({:.0}%) setup ms/step {:.1} ({:.0}% of solve) iters/step {:.1} particle-steps/s {:.3e} load/weight {:.4} {:?}",
         sim.scheme.solver,
         rayon::current_num_threads(),
         n,
@@ -36,5 +36,6 @@ fn main() {
         sim.total_solver_iterations as f64 / s,
         n as f64 * s / wall,
         -load / weight,
+        sim.solver_reuse_counts(),
     );
 }

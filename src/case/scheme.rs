@@ -103,7 +103,8 @@ pub enum SolverKind {
     /// 10k, 40k, 160k particles) and its triangular solves run on one thread.
     PcgIc0,
     /// Conjugate gradient with a smoothed-aggregation algebraic multigrid V-cycle
-    /// (engine::pressure::amg), rebuilt every step. Measured on the hydrostatic tank (30
+    /// (engine::pressure::amg), rebuilt every `amg_rebuild_interval` steps and reused in
+    /// between (engine::pressure::reuse). Measured with a rebuild every step on the hydrostatic tank (30
     /// steps from rest, 2 threads, loaded 2-core machine): 7, 7, 15 iterations at 10k,
     /// 40k, 160k particles; whole step 1.3x, 1.9x, 3x faster than IC(0); the setup is
     /// about half of the solve. At 5k particles the two are level, at 1.2k IC(0) is
@@ -158,6 +159,11 @@ pub struct Scheme {
     /// Relative residual at which the linear solver stops.
     pub solver_tolerance: f64,
     pub solver_max_iterations: usize,
+    /// pcg_amg only: steps one AMG hierarchy preconditions before it is rebuilt (1:
+    /// rebuilt every step). In between, the hierarchy of an earlier step is fitted to
+    /// the new matrix (engine::pressure::reuse); it is rebuilt sooner when the
+    /// iterations grow by half. The solution keeps the solver tolerance either way.
+    pub amg_rebuild_interval: usize,
     /// Influence radius r_e/l0 of PND, gradient and source.
     pub radius: f64,
     /// Influence radius r_e/l0 of the Laplacian; null: `radius` (3.1 for the classic Laplacian).
@@ -212,6 +218,7 @@ impl Default for Scheme {
             solver: SolverKind::default(),
             solver_tolerance: 1.0e-8,
             solver_max_iterations: 2000,
+            amg_rebuild_interval: 10,
             radius: 2.1,
             laplacian_radius: None,
             surface_threshold: 0.97,

@@ -467,6 +467,12 @@ fn check_scalars(case: &Case) -> Check {
     if s.solver_max_iterations == 0 {
         return reject("scheme.solver_max_iterations", "must be positive (got 0)");
     }
+    if s.amg_rebuild_interval == 0 {
+        return reject(
+            "scheme.amg_rebuild_interval",
+            "must be positive (got 0): 1 rebuilds the AMG hierarchy every step",
+        );
+    }
     if !(s.surface_threshold > 0.0 && s.surface_threshold <= 1.0) {
         return reject(
             "scheme.surface_threshold",

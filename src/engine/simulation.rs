@@ -108,6 +108,10 @@ pub struct Simulation {
     pub(crate) neighbors: NeighborList,
     pub(crate) contacts: WallContacts,
     pub(crate) scratch: super::step::Scratch,
+    /// The pressure preconditioner carried from step to step (the AMG hierarchy, see
+    /// engine::pressure::reuse). State, not a buffer: it changes the iterates of later
+    /// solves (within the solver tolerance), so it lives with the simulation it serves.
+    pub(crate) solver_cache: super::pressure::SolverCache,
 }
 
 impl Simulation {
@@ -154,6 +158,7 @@ impl Simulation {
             neighbors: NeighborList::default(),
             contacts: WallContacts::default(),
             scratch: Default::default(),
+            solver_cache: Default::default(),
         };
         sim.initialize();
         sim
@@ -162,6 +167,12 @@ impl Simulation {
     /// Number of fluid particles now.
     pub fn particle_count(&self) -> usize {
         self.particles.len()
+    }
+
+    /// How the pressure preconditioners of the steps so far were obtained (built or
+    /// reused AMG hierarchies).
+    pub fn solver_reuse_counts(&self) -> super::pressure::ReuseCounts {
+        self.solver_cache.counts()
     }
 
     /// Largest particle speed now.

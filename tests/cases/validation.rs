@@ -150,6 +150,8 @@ fn non_positive_solver_tolerance() {
     assert_error(&e, "scheme.solver_tolerance", "positive");
     let e = rejected_json(|v| v["scheme"]["solver_max_iterations"] = json!(0));
     assert_error(&e, "scheme.solver_max_iterations", "positive");
+    let e = rejected_json(|v| v["scheme"]["amg_rebuild_interval"] = json!(0));
+    assert_error(&e, "scheme.amg_rebuild_interval", "positive");
 }
 
 #[test]

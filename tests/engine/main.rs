@@ -2,6 +2,7 @@
 //! lattice sums, and determinism. Each test compares with an exact value.
 
 mod amg;
+mod amg_reuse;
 mod determinism;
 mod kernels;
 mod lattice;

@@ -1,7 +1,8 @@
 //! Smoothed-aggregation algebraic multigrid (Vaněk, Mandel & Brezina 1996) as a
 //! preconditioner for conjugate gradients on the pressure Poisson matrix.
 //!
-//! Setup (rebuilt every solve, since the particles move): greedy aggregation of strongly
+//! Setup (from scratch every few steps, since the particles move; in between the
+//! hierarchy is reused, see [`super::reuse`]): greedy aggregation of strongly
 //! connected unknowns, the piecewise-constant tentative prolongator smoothed by one damped
 //! Jacobi step, P = (I - ω D⁻¹A) P₀, Galerkin coarse operators A_c = Pᵀ A P, down to a
 //! small level that is factorised densely (Cholesky). Application: one symmetric V(1,1)
@@ -285,9 +286,10 @@ fn aggregate(a: &CsrMatrix, diag: &[Real]) -> (Vec<u32>, usize) {
     (agg, count as usize)
 }
 
-struct Level<'a> {
-    /// The operator (the caller's matrix on the finest level, not copied).
-    a: Cow<'a, CsrMatrix>,
+struct Level {
+    /// The operator; empty on the finest level, whose operator is the caller's matrix
+    /// (not copied, and a different matrix each solve when the hierarchy is reused).
+    a: CsrMatrix,
     /// Damped Jacobi smoother: ω / a_ii.
     smoother: Vec<Real>,
     /// Prolongation (n × n_c) and restriction Pᵀ.
@@ -376,30 +378,39 @@ impl Coarsest {
 }
 
 fn diagonal(a: &CsrMatrix) -> Vec<Real> {
-    (0..a.n)
-        .map(|i| {
-            (a.row_ptr[i]..a.row_ptr[i + 1])
-                .filter(|&k| a.col[k] as usize == i)
-                .map(|k| a.val[k])
-                .sum::<Real>()
-        })
-        .collect()
+    let mut d = vec![0.0; a.n];
+    // each entry from its own row, in column order: deterministic in parallel
+    for_rows(&mut d, |i, di| {
+        *di = (a.row_ptr[i]..a.row_ptr[i + 1])
+            .filter(|&k| a.col[k] as usize == i)
+            .map(|k| a.val[k])
+            .sum::<Real>()
+    });
+    d
 }
 
 /// Gershgorin bound of the spectral radius of D⁻¹A (2 for the fine Laplacian).
 fn jacobi_radius(a: &CsrMatrix, diag: &[Real]) -> Real {
-    (0..a.n)
-        .map(|i| {
-            let s: Real = (a.row_ptr[i]..a.row_ptr[i + 1])
-                .map(|k| a.val[k].abs())
-                .sum();
-            if diag[i] > 0.0 {
-                s / diag[i]
-            } else {
-                1.0
-            }
-        })
-        .fold(1.0, Real::max)
+    let row = |i: usize| {
+        let s: Real = (a.row_ptr[i]..a.row_ptr[i + 1])
+            .map(|k| a.val[k].abs())
+            .sum();
+        if diag[i] > 0.0 {
+            s / diag[i]
+        } else {
+            1.0
+        }
+    };
+    // a maximum does not depend on the order of the reduction: deterministic
+    if a.n < PARALLEL_ROWS {
+        (0..a.n).map(row).fold(1.0, Real::max)
+    } else {
+        (0..a.n)
+            .into_par_iter()
+            .with_min_len(1024)
+            .map(row)
+            .reduce(|| 1.0, Real::max)
+    }
 }
 
 /// ω/a_ii with ω = 4/(3ρ): damped Jacobi, convergent for SPD A (ω ρ < 2).
@@ -411,16 +422,41 @@ fn jacobi_weights(a: &CsrMatrix) -> Vec<Real> {
         .collect()
 }
 
-/// The multigrid hierarchy of one matrix, applied as z = M⁻¹ r.
-pub struct Amg<'a> {
-    levels: Vec<Level<'a>>,
+/// The multigrid hierarchy below a fine matrix that it does not hold: transfers,
+/// coarse operators, smoothers and work vectors. Owned, so that it can outlive the
+/// matrix it was built from and precondition the next one ([`super::SolverCache`]).
+pub(crate) struct Hierarchy {
+    levels: Vec<Level>,
     work: Vec<Work>,
     coarsest: Coarsest,
 }
 
-impl<'a> Amg<'a> {
+/// Smoothed prolongator of one level: row i of (I - ω D⁻¹A) P₀, P₀ the aggregates.
+fn smoothed_prolongator(
+    a: &CsrMatrix,
+    diag: &[Real],
+    omega: Real,
+    agg: &[u32],
+    nc: usize,
+) -> CsrMatrix {
+    build_rows(a.n, nc, |i, acc| {
+        let w = if diag[i] > 0.0 { omega / diag[i] } else { 0.0 };
+        acc.add(agg[i], 1.0);
+        for k in a.row_ptr[i]..a.row_ptr[i + 1] {
+            acc.add(agg[a.col[k] as usize], -w * a.val[k]);
+        }
+    })
+}
+
+/// Galerkin coarse operator R A P.
+fn galerkin(a: &CsrMatrix, p: &CsrMatrix, r: &CsrMatrix) -> CsrMatrix {
+    let ap = multiply(a, p, r.n);
+    multiply(r, &ap, r.n)
+}
+
+impl Hierarchy {
     /// Build the hierarchy of a symmetric positive definite matrix.
-    pub fn new(a: &'a CsrMatrix) -> Self {
+    pub(crate) fn new(a: &CsrMatrix) -> Self {
         let mut levels = Vec::new();
         let mut current = Cow::Borrowed(a);
         while current.n > COARSEST && levels.len() < MAX_LEVELS {
@@ -431,23 +467,18 @@ impl<'a> Amg<'a> {
             }
             let rho = jacobi_radius(&current, &diag);
             let omega = 4.0 / (3.0 * rho);
-            // smoothed prolongator: row i of (I - ω D⁻¹A) P₀
-            let am = &current;
-            let p = build_rows(current.n, nc, |i, acc| {
-                let w = if diag[i] > 0.0 { omega / diag[i] } else { 0.0 };
-                acc.add(agg[i], 1.0);
-                for k in am.row_ptr[i]..am.row_ptr[i + 1] {
-                    acc.add(agg[am.col[k] as usize], -w * am.val[k]);
-                }
-            });
+            let p = smoothed_prolongator(&current, &diag, omega, &agg, nc);
             let r = transpose(&p, nc);
-            let ap = multiply(&current, &p, nc);
-            let coarse = multiply(&r, &ap, nc);
+            let coarse = galerkin(&current, &p, &r);
             let smoother = diag
                 .iter()
                 .map(|&d| if d > 0.0 { omega / d } else { 0.0 })
                 .collect();
-            let a_level = std::mem::replace(&mut current, Cow::Owned(coarse));
+            let a_level = match std::mem::replace(&mut current, Cow::Owned(coarse)) {
+                // the finest operator stays the caller's
+                Cow::Borrowed(_) => CsrMatrix::default(),
+                Cow::Owned(m) => m,
+            };
             levels.push(Level {
                 a: a_level,
                 smoother,
@@ -457,10 +488,11 @@ impl<'a> Amg<'a> {
         }
         let work = levels
             .iter()
-            .map(|l| Work {
-                res: vec![0.0; l.a.n],
-                bc: vec![0.0; l.r.n],
-                xc: vec![0.0; l.r.n],
+            .enumerate()
+            .map(|(l, level)| Work {
+                res: vec![0.0; if l == 0 { a.n } else { level.a.n }],
+                bc: vec![0.0; level.r.n],
+                xc: vec![0.0; level.r.n],
             })
             .collect();
         let coarsest = Coarsest::new(current.into_owned());
@@ -471,14 +503,113 @@ impl<'a> Amg<'a> {
         }
     }
 
-    /// Number of levels including the last (directly solved) one.
-    pub fn depth(&self) -> usize {
-        self.levels.len() + 1
+    /// Levels above the last (0 when the fine matrix itself is solved on the last level,
+    /// and the hierarchy cannot serve another matrix).
+    pub(crate) fn coarsened_levels(&self) -> usize {
+        self.levels.len()
     }
 
-    /// Unknowns per level, finest first.
-    pub fn sizes(&self) -> Vec<usize> {
-        let mut s: Vec<usize> = self.levels.iter().map(|l| l.a.n).collect();
+    /// Fit the finest level to a new set of fine unknowns: new row `i` was old row
+    /// `old_row[i]` (or is new: `u32::MAX`), and `new_row[k]` is the new row of old row
+    /// `k` (or `u32::MAX`: gone). P keeps the rows of the unknowns that stay, a new
+    /// unknown gets an empty row (only the smoother acts on it), R = Pᵀ follows. The
+    /// entries keep their order, so the result is deterministic.
+    pub(crate) fn remap_fine_rows(&mut self, old_row: &[u32], new_row: &[u32]) {
+        let Some(level) = self.levels.first_mut() else {
+            return;
+        };
+        let p = &level.p;
+        let mut row_ptr = Vec::with_capacity(old_row.len() + 1);
+        row_ptr.push(0);
+        let mut len = 0;
+        for &o in old_row {
+            if o != NONE {
+                len += p.row_ptr[o as usize + 1] - p.row_ptr[o as usize];
+            }
+            row_ptr.push(len);
+        }
+        let mut col = Vec::with_capacity(len);
+        let mut val = Vec::with_capacity(len);
+        for &o in old_row {
+            if o != NONE {
+                let range = p.row_ptr[o as usize]..p.row_ptr[o as usize + 1];
+                col.extend_from_slice(&p.col[range.clone()]);
+                val.extend_from_slice(&p.val[range]);
+            }
+        }
+        level.p = CsrMatrix {
+            n: old_row.len(),
+            row_ptr,
+            col,
+            val,
+        };
+        let r = &mut level.r;
+        let mut kept = 0;
+        let mut start = 0;
+        for c in 0..r.n {
+            let end = r.row_ptr[c + 1];
+            for k in start..end {
+                let to = new_row[r.col[k] as usize];
+                if to != NONE {
+                    r.col[kept] = to;
+                    r.val[kept] = r.val[k];
+                    kept += 1;
+                }
+            }
+            start = end;
+            r.row_ptr[c + 1] = kept;
+        }
+        r.col.truncate(kept);
+        r.val.truncate(kept);
+        self.work[0].res.resize(old_row.len(), 0.0);
+    }
+
+    /// The damped Jacobi smoother of the finest level from a new fine matrix (the
+    /// coarse levels are kept as they are).
+    pub(crate) fn refresh_fine_smoother(&mut self, a: &CsrMatrix) {
+        if let Some(level) = self.levels.first_mut() {
+            level.smoother = jacobi_weights(a);
+        }
+    }
+
+    /// Recompute the coarse operators (Galerkin products with the kept transfers) and
+    /// the smoothers from a new fine matrix. False when a coarse operator lost a
+    /// positive diagonal (an aggregate whose unknowns all left): rebuild instead.
+    pub(crate) fn refresh_operators(&mut self, a: &CsrMatrix) -> bool {
+        let mut current = Cow::Borrowed(a);
+        for level in &mut self.levels {
+            let coarse = galerkin(&current, &level.p, &level.r);
+            if diagonal(&coarse).iter().any(|&d| !(d > 0.0)) {
+                return false;
+            }
+            level.smoother = jacobi_weights(&current);
+            if let Cow::Owned(m) = std::mem::replace(&mut current, Cow::Owned(coarse)) {
+                level.a = m;
+            }
+        }
+        self.coarsest = Coarsest::new(current.into_owned());
+        true
+    }
+
+    /// z = M⁻¹ r for the fine matrix `a`: one V(1,1) cycle from zero.
+    pub(crate) fn apply(&mut self, a: &CsrMatrix, r: &[Real], z: &mut [Real]) {
+        if self.levels.is_empty() {
+            self.coarsest.solve(r, z);
+            return;
+        }
+        cycle(
+            &self.levels,
+            &mut self.work,
+            &mut self.coarsest,
+            Some(a),
+            r,
+            z,
+        );
+    }
+
+    /// Unknowns per level below the finest, then the last.
+    fn coarse_sizes(&self) -> Vec<usize> {
+        let mut s: Vec<usize> = self.levels.iter().skip(1).map(|l| l.a.n).collect();
         s.push(match &self.coarsest {
             Coarsest::Dense { rhs, .. } => rhs.len(),
             Coarsest::Smooth { a, .. } => a.n,
@@ -486,27 +617,68 @@ impl<'a> Amg<'a> {
         s
     }
 
-    /// Σ nnz over the levels / nnz of the finest.
-    pub fn operator_complexity(&self) -> Real {
-        let fine = self.levels.first().map_or(1, |l| l.a.nnz()).max(1);
-        let mut total: usize = self.levels.iter().map(|l| l.a.nnz()).sum();
+    /// Σ nnz over the levels below the finest.
+    fn coarse_nnz(&self) -> usize {
+        let mut total: usize = self.levels.iter().skip(1).map(|l| l.a.nnz()).sum();
         total += match &self.coarsest {
             Coarsest::Dense { rhs, .. } => rhs.len() * rhs.len(),
             Coarsest::Smooth { a, .. } => a.nnz(),
         };
-        total as Real / fine as Real
+        total
+    }
+}
+
+/// The multigrid hierarchy of one matrix, applied as z = M⁻¹ r.
+pub struct Amg<'a> {
+    a: &'a CsrMatrix,
+    hierarchy: Hierarchy,
+}
+
+impl<'a> Amg<'a> {
+    /// Build the hierarchy of a symmetric positive definite matrix.
+    pub fn new(a: &'a CsrMatrix) -> Self {
+        Self {
+            a,
+            hierarchy: Hierarchy::new(a),
+        }
+    }
+
+    /// Number of levels including the last (directly solved) one.
+    pub fn depth(&self) -> usize {
+        self.hierarchy.levels.len() + 1
+    }
+
+    /// Unknowns per level, finest first.
+    pub fn sizes(&self) -> Vec<usize> {
+        let mut s = Vec::new();
+        if !self.hierarchy.levels.is_empty() {
+            s.push(self.a.n);
+        }
+        s.extend(self.hierarchy.coarse_sizes());
+        s
+    }
+
+    /// Σ nnz over the levels / nnz of the finest.
+    pub fn operator_complexity(&self) -> Real {
+        if self.hierarchy.levels.is_empty() {
+            return self.hierarchy.coarse_nnz() as Real / self.a.nnz().max(1) as Real;
+        }
+        let fine = self.a.nnz().max(1);
+        (fine + self.hierarchy.coarse_nnz()) as Real / fine as Real
     }
 
     /// z = M⁻¹ r: one V(1,1) cycle from zero.
     pub fn apply(&mut self, r: &[Real], z: &mut [Real]) {
-        cycle(&self.levels, &mut self.work, &mut self.coarsest, r, z);
+        self.hierarchy.apply(self.a, r, z);
     }
 }
 
+/// One V-cycle from level `levels[0]`, whose operator is `fine` on the finest level.
 fn cycle(
-    levels: &[Level<'_>],
+    levels: &[Level],
     work: &mut [Work],
     coarsest: &mut Coarsest,
+    fine: Option<&CsrMatrix>,
     b: &[Real],
     x: &mut [Real],
 ) {
@@ -516,7 +688,7 @@ fn cycle(
     };
     let (w, rest_work) = work.split_first_mut().expect("one work entry per level");
     let Work { res, bc, xc } = w;
-    let (a, s) = (&level.a, &level.smoother);
+    let (a, s) = (fine.unwrap_or(&level.a), &level.smoother);
     // pre-smoothing from zero, residual, restriction
     for_rows(x, |i, xi| *xi = s[i] * b[i]);
     {
@@ -527,7 +699,7 @@ fn cycle(
         let res: &[Real] = res;
         for_rows(bc, |c, v| *v = row_dot(&level.r, c, res));
     }
-    cycle(rest, rest_work, coarsest, bc, xc);
+    cycle(rest, rest_work, coarsest, None, bc, xc);
     // prolongation and post-smoothing
     {
         let xc: &[Real] = xc;

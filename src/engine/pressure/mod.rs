@@ -8,10 +8,14 @@
 mod amg;
 mod csr;
 mod pcg;
+mod reuse;
 
 pub use amg::Amg;
 pub use csr::CsrMatrix;
 pub use pcg::{bicgstab, conjugate_gradient, Preconditioner};
+pub use reuse::{
+    growth_limit, solve_amg_reusing, CoarseUpdate, ReuseCounts, ReusePolicy, SolverCache,
+};
 
 use crate::case::SolverKind;
 use crate::engine::math::Real;
@@ -66,5 +70,26 @@ pub fn solve(
         SolverKind::PcgAmg => conjugate_gradient(a, b, x, params, Preconditioner::Amg),
         SolverKind::Bicgstab => bicgstab(a, b, x, params),
         SolverKind::Direct => csr::solve_direct(a, b, x),
+    }
+}
+
+/// [`solve`], with the AMG hierarchy of [`SolverCache`] reused across solves as
+/// `policy` allows (the other solvers keep nothing). `keys[row]` names the unknown of
+/// each row across solves (the particle index, below `key_space`).
+#[allow(clippy::too_many_arguments)]
+pub fn solve_reusing(
+    kind: SolverKind,
+    a: &CsrMatrix,
+    b: &[Real],
+    x: &mut [Real],
+    params: SolveParams,
+    cache: &mut SolverCache,
+    keys: &[u32],
+    key_space: usize,
+    policy: ReusePolicy,
+) -> Result<SolveInfo, SolveError> {
+    match kind {
+        SolverKind::PcgAmg => solve_amg_reusing(a, b, x, params, cache, keys, key_space, policy),
+        _ => solve(kind, a, b, x, params),
     }
 }

@@ -2,7 +2,7 @@
 //! IC(0)) for the symmetric systems, BiCGSTAB (Jacobi) for the others. Dot products
 //! use fixed-chunk reductions so iterates do not depend on the thread count.
 
-use super::amg::Amg;
+use super::amg::Hierarchy;
 use super::{CsrMatrix, SolveError, SolveInfo, SolveParams};
 use crate::engine::math::{deterministic_sum, Real};
 use rayon::prelude::*;
@@ -155,11 +155,10 @@ impl Ic0 {
     }
 }
 
-/// What both Krylov solvers start from: ||b||, the inverse diagonal and r = b - A x.
-/// `None` when there is nothing to solve (empty system, or b = 0 and then x = 0).
+/// What both Krylov solvers start from: ||b|| and r = b - A x. `None` when there is
+/// nothing to solve (empty system, or b = 0 and then x = 0).
 struct Start {
     bnorm: Real,
-    inv_diag: Vec<Real>,
     r: Vec<Real>,
 }
 
@@ -172,15 +171,25 @@ fn start(a: &CsrMatrix, b: &[Real], x: &mut [Real]) -> Option<Start> {
         x.iter_mut().for_each(|v| *v = 0.0);
         return None;
     }
-    let inv_diag = a
-        .diagonal()
-        .iter()
-        .map(|d| if *d != 0.0 { 1.0 / d } else { 1.0 })
-        .collect();
     let mut r = vec![0.0; a.n];
     a.mul(x, &mut r);
-    r.iter_mut().zip(b).for_each(|(ri, bi)| *ri = bi - *ri);
-    Some(Start { bnorm, inv_diag, r })
+    for_each_index(&mut r, |i, ri| *ri = b[i] - *ri);
+    Some(Start { bnorm, r })
+}
+
+fn inverse_diagonal(a: &CsrMatrix) -> Vec<Real> {
+    a.diagonal()
+        .iter()
+        .map(|d| if *d != 0.0 { 1.0 / d } else { 1.0 })
+        .collect()
+}
+
+/// Add the time since `clock` to the process-wide setup counter.
+pub(crate) fn count_setup(clock: std::time::Instant) {
+    SETUP_NANOS.fetch_add(
+        clock.elapsed().as_nanos() as u64,
+        std::sync::atomic::Ordering::Relaxed,
+    );
 }
 
 /// Preconditioned conjugate gradients; `x` is the initial guess.
@@ -191,32 +200,51 @@ pub fn conjugate_gradient(
     params: SolveParams,
     pre: Preconditioner,
 ) -> Result<SolveInfo, SolveError> {
-    let n = a.n;
-    let Some(Start {
-        bnorm,
-        inv_diag,
-        r: r0,
-    }) = start(a, b, x)
-    else {
-        return Ok(SolveInfo::default());
-    };
+    if a.n == 0 || dot(b, b) == 0.0 {
+        // nothing to solve: no preconditioner to build
+        return pcg_with(a, b, x, params, |r, z| z.copy_from_slice(r));
+    }
     let setup = std::time::Instant::now();
-    let ic = match pre {
-        Preconditioner::IncompleteCholesky => Ic0::new(a),
-        _ => None,
-    };
-    let mut amg = match pre {
-        Preconditioner::Amg => Some(Amg::new(a)),
-        _ => None,
-    };
-    SETUP_NANOS.fetch_add(
-        setup.elapsed().as_nanos() as u64,
-        std::sync::atomic::Ordering::Relaxed,
-    );
-    let mut precondition = |r: &[Real], z: &mut [Real]| match (&ic, &mut amg) {
-        (Some(ic), _) => ic.apply(r, z),
-        (None, Some(amg)) => amg.apply(r, z),
-        (None, None) => for_each_index(z, |i, zi| *zi = r[i] * inv_diag[i]),
+    match pre {
+        Preconditioner::Jacobi => {
+            let inv_diag = inverse_diagonal(a);
+            count_setup(setup);
+            pcg_with(a, b, x, params, |r, z| {
+                for_each_index(z, |i, zi| *zi = r[i] * inv_diag[i])
+            })
+        }
+        Preconditioner::IncompleteCholesky => {
+            let ic = Ic0::new(a);
+            let inv_diag = match ic {
+                Some(_) => Vec::new(),
+                None => inverse_diagonal(a),
+            };
+            count_setup(setup);
+            pcg_with(a, b, x, params, |r, z| match &ic {
+                Some(ic) => ic.apply(r, z),
+                None => for_each_index(z, |i, zi| *zi = r[i] * inv_diag[i]),
+            })
+        }
+        Preconditioner::Amg => {
+            let mut amg = Hierarchy::new(a);
+            count_setup(setup);
+            pcg_with(a, b, x, params, |r, z| amg.apply(a, r, z))
+        }
+    }
+}
+
+/// Conjugate gradients with the preconditioner `precondition(r, z)`: z = M⁻¹ r, M
+/// symmetric positive definite.
+pub(crate) fn pcg_with(
+    a: &CsrMatrix,
+    b: &[Real],
+    x: &mut [Real],
+    params: SolveParams,
+    mut precondition: impl FnMut(&[Real], &mut [Real]),
+) -> Result<SolveInfo, SolveError> {
+    let n = a.n;
+    let Some(Start { bnorm, r: r0 }) = start(a, b, x) else {
+        return Ok(SolveInfo::default());
     };
     let mut r = r0;
     let mut z = vec![0.0; n];
@@ -266,14 +294,10 @@ pub fn bicgstab(
     params: SolveParams,
 ) -> Result<SolveInfo, SolveError> {
     let n = a.n;
-    let Some(Start {
-        bnorm,
-        inv_diag,
-        r: r0,
-    }) = start(a, b, x)
-    else {
+    let Some(Start { bnorm, r: r0 }) = start(a, b, x) else {
         return Ok(SolveInfo::default());
     };
+    let inv_diag = inverse_diagonal(a);
     let jac = |v: &[Real], out: &mut [Real]| {
         out.par_iter_mut()
             .enumerate()
