@@ -365,7 +365,9 @@ fn a_tiny_tank_is_measured_with_stages_iterations_and_memory() {
     assert_eq!(row.steps, 3);
     assert!(row.particles > 700 && row.particles < 900);
     assert!(row.ms_per_step > 0.0 && row.particle_steps_per_s > 0.0);
-    assert!(row.solver_iterations_per_step >= 1.0);
+    // the first step solves from p = 0; the still tank is then an exact discrete
+    // equilibrium, so the warm-started later steps may need no iteration at all
+    assert!(row.solver_iterations_per_step > 0.0, "{row:?}");
     // the stages account for the step (the rest is the loop itself)
     assert!(
         row.stage_ms.total() <= row.ms_per_step * 1.001 + 1e-6,

@@ -3,17 +3,16 @@
 //! reads rho g h within 2%, no particle leaves, and the fluid stays still (max speed
 //! below 1% of sqrt(g H)).
 //!
-//! Measured with the hydrostatic ghosts of the PPE (scheme.hydrostatic_ghosts, the
-//! default): at 2 s the load is 0.07% above the weight at every sample, the probe reads
-//! 2452.8 Pa against 2452.5 Pa, and the largest speed is 2.4 mm/s (limit 22 mm/s).
-//! Without the ghosts the row below the free surface, which misses one neighbour 2 l0
-//! above it, lifted the whole column by 14 Pa; the top row rose at 0.45 mm/s, the rows
-//! below it thinned to n = 0.92 n0 and the wall corners went unstable before 2 s.
-//!
-//! Known defect, past 2 s: a checkerboard velocity mode (neighbours moving in opposite
-//! directions, mirror-symmetric) grows from the corners, e-folding about 0.25 s: max
-//! speed 1.8 mm/s at 2 s, 19 mm/s at 2.5 s, 56 mm/s at 3 s. The 20 s run of the stress
-//! suite is therefore ignored.
+//! Measured with the hydrostatic ghosts of the PPE (scheme.hydrostatic_ghosts) and the
+//! level free-surface value (engine::step::surface_value): the lattice is an exact
+//! discrete equilibrium, and to 4 s the tank load stays at the water weight (pressure
+//! integral: 4904.98 vs 4905.0 N/m), the probe reads 2452.5 Pa and no particle moves
+//! (max speed 0.0). Without the ghosts the row below the free surface, which misses one
+//! neighbour 2 l0 above it, lifted the whole column by 14 Pa and the corners went unstable
+//! before 2 s; with a surface value that followed the tilt of the surface normal, the
+//! top-row particles next to the side walls took 48.9 Pa instead of 49.05 Pa, which drove
+//! a slow flow up the walls and a particle-scale mode that grew from 2 s (19 mm/s at
+//! 2.5 s, 0.46 m/s at 4 s).
 
 use super::{read_csv, shipped_case};
 use mpsfsi::run::{run_case, Quiet, RunStatus};
