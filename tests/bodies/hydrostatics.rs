@@ -44,9 +44,9 @@ fn fixed_submerged_body_carries_its_buoyancy() {
 
 /// A box of half the density of water (0.4 m wide, 40 kg/m) released 1 cm above its
 /// equilibrium heaves to rest at the draft d = M / (rho b) = 0.1 m (within 2 %),
-/// measured from the free surface away from the box, and its heave decays.
+/// measured from the mean water level (fluid volume / tank width), and its heave decays.
 #[test]
-#[ignore = "fails: draft +4.67 % (0.1047 m), heave amplitude 8.2 mm in the first second and 7.4 mm in the last; about 4 s simulated (75 s on two cores)"]
+#[ignore = "fails: draft -6.4 % from the mean water level (+4.5 % from the highest particle away from the box, which the waves bias up); heave amplitude 8.2 mm in the first second, 7.0 mm in the last (the closed 2 m tank keeps the radiated waves); 4 s simulated, about a minute on two cores"]
 fn floating_box_settles_at_archimedes_draft() {
     let case = shipped("floating_box.json", &[]);
     let expect = 40.0 / (RHO * 0.4);
@@ -76,7 +76,15 @@ fn floating_box_settles_at_archimedes_draft() {
     let mean = |idx: &[usize], f: &dyn Fn(usize) -> f64| {
         idx.iter().map(|&i| f(i)).sum::<f64>() / idx.len() as f64
     };
-    let draft = mean(&last, &|i| levels[i] - bottom[i]);
+    // The mean free-surface level from the fluid's volume (N l0², conserved), which the
+    // sloshing of the closed tank does not bias: h = y_tank + (N l0² + b d) / W with
+    // d = h - y_bottom gives d = (y_tank + N l0² / W - y_bottom) / (1 - b / W).
+    let (width, tank_bottom, breadth) = (2.0, -0.5, 0.4);
+    let volume = trace.particles as f64 * l0 * l0;
+    let draft =
+        (tank_bottom + volume / width - mean(&last, &|i| bottom[i])) / (1.0 - breadth / width);
+    // the highest particle away from the box, as a second reading (waves bias it up)
+    let draft_from_top = mean(&last, &|i| levels[i] - bottom[i]);
     let err = (draft - expect) / expect;
     let amplitude = |idx: &[usize]| {
         let m = mean(idx, &|i| bottom[i]);
@@ -86,7 +94,7 @@ fn floating_box_settles_at_archimedes_draft() {
     };
     let (a_first, a_last) = (amplitude(&window(0.0, 1.0)), amplitude(&last));
     println!(
-        "floating box: draft {draft:.4} m vs {expect:.4} m ({:+.2} %), heave amplitude first second {:.4} m, last second {:.4} m, {} steps, {:.1} s",
+        "floating box: draft {draft:.4} m vs {expect:.4} m ({:+.2} %; from the highest particle away from the box {draft_from_top:.4} m), heave amplitude first second {:.4} m, last second {:.4} m, {} steps, {:.1} s",
         100.0 * err,
         a_first,
         a_last,

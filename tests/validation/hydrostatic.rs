@@ -32,7 +32,8 @@ fn still_water(end: f64) {
     let end_set = format!("time.end={end}");
     let case = shipped_case("hydrostatic.json", &[end_set.as_str()]);
     // one directory per run: the 2 s and 20 s tests may run at once
-    let dir = std::env::temp_dir().join(format!("mpsfsi-hydrostatic-{}-{end}s", std::process::id()));
+    let dir =
+        std::env::temp_dir().join(format!("mpsfsi-hydrostatic-{}-{end}s", std::process::id()));
     let summary = run_case(&case, &dir, &mut Quiet).unwrap();
     assert_eq!(summary.status, RunStatus::Succeeded, "{:?}", summary.reason);
     assert!((summary.simulated_time - end).abs() < 1e-9);
