@@ -11,14 +11,24 @@ fn main() {
     let case = load_case_file(std::path::Path::new(&args[0]), &args[2..]).unwrap();
     let mut sim = Simulation::new(&case);
     let l0 = case.particle_spacing;
+    // AMP overrides the stress scene's ±0.2 (ratio of l0): a tiny one measures growth rates
+    let amplitude = std::env::var("AMP")
+        .ok()
+        .and_then(|a| a.parse().ok())
+        .unwrap_or(PERTURBATION);
     perturb_positions(
         &mut sim.particles.position,
-        PERTURBATION * l0,
+        amplitude * l0,
         PERTURBATION_SEED,
     );
     sim.initialize();
     let weight = sim.particle_count() as f64 * 1000.0 * l0 * l0 * 9.81;
-    let mut next = 0.25;
+    // EVERY: print interval (s)
+    let every: f64 = std::env::var("EVERY")
+        .ok()
+        .and_then(|a| a.parse().ok())
+        .unwrap_or(0.25);
+    let mut next = every;
     while sim.time < end {
         let dt = sim.next_dt();
         if let Err(e) = sim.step(dt) {
@@ -27,12 +37,12 @@ fn main() {
         }
         if sim.time >= next - 1e-9 {
             println!(
-                "t {:5.2}  load {:+7.3}%  vmax {:8.2} mm/s",
+                "t {:5.2}  load {:+9.5}%  vmax {:10.5} mm/s",
                 sim.time,
                 100.0 * (-sim.loads[0].force.y / weight - 1.0),
                 1e3 * sim.max_particle_speed()
             );
-            next += 0.25;
+            next += every;
         }
     }
 }

@@ -40,9 +40,11 @@ pub struct WallLoad {
     pub force: Vec2,
     /// N·m/m about the object's centre of mass (fixed walls: about the origin).
     pub moment: Real,
-    /// Share of `force` from the pressure (wall gradient) terms.
+    /// Pressure share of `force`: the integral of p n over the surface, or the reaction
+    /// of the wall gradient terms (`scheme.wall_load`).
     pub pressure_force: Vec2,
-    /// Share of `force` from the repulsion / collision safety net.
+    /// What the repulsion safety net gave the fluid; part of `force` only with the
+    /// reaction estimator.
     pub repulsion_force: Vec2,
     /// Share from wall viscosity.
     pub viscous_force: Vec2,
