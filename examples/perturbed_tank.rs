@@ -43,6 +43,26 @@ fn main() {
                 1e3 * sim.max_particle_speed()
             );
             next += every;
+            // TOP=k: where the k fastest particles are (the shape of a growing mode)
+            if let Some(k) = std::env::var("TOP")
+                .ok()
+                .and_then(|a| a.parse::<usize>().ok())
+            {
+                let u = &sim.particles.velocity;
+                let mut order: Vec<usize> = (0..u.len()).collect();
+                order.sort_by(|&a, &b| u[b].norm().total_cmp(&u[a].norm()));
+                for &i in order.iter().take(k) {
+                    let x = sim.particles.position[i];
+                    println!(
+                        "   ({:.3}, {:.3}) u = ({:+.4}, {:+.4}) mm/s surface {}",
+                        x.x,
+                        x.y,
+                        1e3 * u[i].x,
+                        1e3 * u[i].y,
+                        sim.particles.free_surface[i]
+                    );
+                }
+            }
         }
     }
 }

@@ -532,6 +532,15 @@ fn check_scalars(case: &Case) -> Check {
             ),
         );
     }
+    if !(0.0..=0.5).contains(&s.velocity_filter) {
+        return reject(
+            "scheme.velocity_filter",
+            format!(
+                "must lie in [0, 0.5]: the share of the neighbour mean taken per step (got {})",
+                s.velocity_filter
+            ),
+        );
+    }
     if let Some(v) = s.max_speed {
         positive(
             "scheme.max_speed",

@@ -190,6 +190,10 @@ fn step<K: Kernel>(sim: &mut Simulation, dt: Real) -> Result<StepInfo, SimError>
     // u^{n+1} = u* - dt/rho ∇p, x^{n+1} = x* + dt (u^{n+1} - u*); wall loads as reactions
     correct_velocity_and_position::<K>(sim, &walls, dt, &mut loads);
     sim.stage_times.correct += seconds(&mut clock);
+    // the filter before the safety net, which must have the last word on wall approach
+    if sim.scheme.velocity_filter > 0.0 {
+        filter_velocity::<K>(sim);
+    }
     keep_particles_apart(sim, &walls, dt, &mut loads);
     if sim.scheme.shifting > 0.0 {
         shift_particles::<K>(sim);
@@ -938,6 +942,37 @@ fn keep_particles_apart(
                 }
             }
         }
+    }
+}
+
+/// The velocity filter (`scheme.velocity_filter`): u_i += eps Σ_j w_ij (u_j - u_i) / n0
+/// over the fluid neighbours at x*. The pair weights are symmetric, so the fluid's
+/// momentum is unchanged; a smooth field changes by O(eps l0² ∇²u) per step, while the
+/// odd-even mode (neighbours moving in opposite directions, invisible to the divergence
+/// of the PPE source and to the gradient) loses a share of order eps every step.
+fn filter_velocity<K: Kernel>(sim: &mut Simulation) {
+    let (re, n0) = (sim.params.re, sim.params.n0);
+    let eps = sim.scheme.velocity_filter;
+    let (x, u, nb) = (&sim.scratch.x_star, &sim.particles.velocity, &sim.neighbors);
+    let du: Vec<Vec2> = (0..u.len())
+        .into_par_iter()
+        .map(|i| {
+            if i >= nb.len() {
+                return Vec2::zeros();
+            }
+            let mut s = Vec2::zeros();
+            for &j in nb.of(i) {
+                let j = j as usize;
+                let d = (x[j] - x[i]).norm();
+                if d < re && d > 0.0 {
+                    s += (u[j] - u[i]) * K::w(d, re);
+                }
+            }
+            s * (eps / n0)
+        })
+        .collect();
+    for (ui, d) in sim.particles.velocity.iter_mut().zip(du) {
+        *ui += d;
     }
 }
 

@@ -157,6 +157,11 @@ fn non_positive_solver_tolerance() {
 #[test]
 fn scheme_ranges() {
     assert_error(
+        &rejected_json(|v| v["scheme"]["velocity_filter"] = json!(0.8)),
+        "scheme.velocity_filter",
+        "[0, 0.5]",
+    );
+    assert_error(
         &rejected_json(|v| v["scheme"]["surface_threshold"] = json!(1.5)),
         "scheme.surface_threshold",
         "(0, 1]",
