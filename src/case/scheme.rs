@@ -208,9 +208,10 @@ pub struct Scheme {
     /// Measured with 0.01: the still tank stays exact to 20 s (load -0.0005 %, max speed
     /// 0.0; without it a mode seeded by round-off grows from 7 s) and a ±1e-4 l0 seed
     /// decays at dt and dt/2; the ±0.2 l0 perturbed tank moves at 0.12-0.27 m/s instead of
-    /// 0.34-0.44; the dam break's front is unchanged (14-21 % ahead); the 10 mm wedge's
-    /// C_F slope is 17.09 (13.56 without). Not the default yet: with it the CMPS/CHL
-    /// variant's still tank diverges at 0.3 s, and the wedge was measured at one spacing.
+    /// 0.34-0.44; the dam break's front is unchanged (14-21 % ahead); the wedge's C_F
+    /// slope is 17.09 / 17.70 at 10 / 5 mm (13.56 / 15.01 without; per-step noise 21 %
+    /// lower at 5 mm). Not the default: it moves the wedge away from 14.04, and with it
+    /// the CMPS/CHL variant's still tank diverges at 0.3 s.
     pub velocity_filter: f64,
     /// How wall and body loads are measured.
     pub wall_load: WallLoadKind,
