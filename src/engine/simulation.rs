@@ -43,9 +43,10 @@ pub struct WallLoad {
     /// Pressure share of `force`: the integral of p n over the surface, or the reaction
     /// of the wall gradient terms (`scheme.wall_load`).
     pub pressure_force: Vec2,
-    /// What the repulsion safety net gave the fluid; part of `force` only with the
-    /// reaction estimator.
+    /// What the repulsion safety net gave the fluid; part of `force` (and
+    /// `repulsion_moment` of `moment`) only with the reaction estimator.
     pub repulsion_force: Vec2,
+    pub repulsion_moment: Real,
     /// Share from wall viscosity.
     pub viscous_force: Vec2,
 }

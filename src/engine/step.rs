@@ -202,11 +202,13 @@ fn step<K: Kernel>(sim: &mut Simulation, dt: Real) -> Result<StepInfo, SimError>
 
     // n and ∇·u at the end of the step, for the error-compensating source
     update_number_density_and_divergence::<K>(sim);
+    // the pressure-integral load leaves the safety net out (its share is reported apart)
     let with_repulsion = sim.scheme.wall_load == WallLoadKind::Reaction;
     for load in &mut loads {
         load.force = load.pressure_force + load.viscous_force;
         if with_repulsion {
             load.force += load.repulsion_force;
+            load.moment += load.repulsion_moment;
         }
     }
     sim.loads = loads;
@@ -912,8 +914,6 @@ fn keep_particles_apart(
         }
     }
     let rw = sim.scheme.wall_repulsion_distance * l0;
-    // the pressure-integral load leaves the safety net out (its share is reported apart)
-    let reaction = sim.scheme.wall_load == WallLoadKind::Reaction;
     if rw > 0.0 {
         for i in 0..n {
             for c in sim.contacts.of(i) {
@@ -936,10 +936,8 @@ fn keep_particles_apart(
                 let f = -du * (m / dt);
                 let load = &mut loads[c.object as usize];
                 load.repulsion_force += f;
-                if reaction {
-                    load.moment +=
-                        moment_about(walls[c.object as usize].state.center_of_mass, c.point, f);
-                }
+                load.repulsion_moment +=
+                    moment_about(walls[c.object as usize].state.center_of_mass, c.point, f);
             }
         }
     }
