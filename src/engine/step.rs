@@ -26,7 +26,9 @@ use super::pressure::{self, CsrMatrix, SolveParams};
 use super::simulation::{SimError, Simulation, StepInfo, WallLoad};
 use super::walls::pressure_load::pressure_loads;
 use super::walls::{moment_about, PlacedWall, WallContacts, WallKernels, WallWeights};
-use crate::case::{GradientKind, LaplacianKind, SourceKind, SpacingControl, WallLoadKind};
+use crate::case::{
+    GradientKind, LaplacianKind, SourceKind, SpacingControl, WallKinematics, WallLoadKind,
+};
 use crate::with_kernel;
 use rayon::prelude::*;
 use std::marker::PhantomData;
@@ -181,7 +183,7 @@ fn step<K: Kernel>(sim: &mut Simulation, dt: Real) -> Result<StepInfo, SimError>
     sim.stage_times.number_density += seconds(&mut clock);
 
     // PPE: source (HS + ECS, paper 004 eqs. 3, 10-11), Laplacian (HL, eq. 9), Neumann walls
-    compute_neumann_gradients(sim);
+    compute_neumann_gradients(sim, dt);
     assemble_pressure_equation::<K>(sim, &weights, dt);
     sim.stage_times.assemble += seconds(&mut clock);
     let (iterations, residual) = solve_pressure(sim)?;
@@ -439,20 +441,29 @@ fn surface_value(rho_g: Vec2, m_hat: Vec2, l0: Real) -> Real {
 
 /// The extrapolation gradient c = rho (g - a_w) of every wall contact (module docs);
 /// zero for the PND source (virtual points take p_i).
-fn compute_neumann_gradients(sim: &mut Simulation) {
+fn compute_neumann_gradients(sim: &mut Simulation, dt: Real) {
     let rho = sim.params.density;
     let g = vec2(sim.params.gravity);
     let extrapolate = sim.scheme.source != SourceKind::Pnd;
-    sim.scratch.neumann = sim
-        .contacts
-        .contacts
-        .par_iter()
-        .map(|c| {
-            if extrapolate {
-                (g - c.wall_acceleration) * rho
-            } else {
-                Vec2::zeros()
-            }
+    let approach = sim.scheme.wall_kinematics == WallKinematics::Neumann;
+    let contacts = &sim.contacts;
+    let u = &sim.scratch.u_start;
+    sim.scratch.neumann = (0..u.len())
+        .into_par_iter()
+        .flat_map_iter(|i| {
+            contacts.of(i).iter().map(move |c| {
+                if !extrapolate {
+                    return Vec2::zeros();
+                }
+                let mut grad = (g - c.wall_acceleration) * rho;
+                // the approach left over from the last step (zero when the fluid followed
+                // the wall): the virtual pressure behind the wall rises to push it back
+                if approach {
+                    let un = (u[i] - c.wall_velocity).dot(&c.normal);
+                    grad += c.normal * (rho / dt * un.min(0.0));
+                }
+                grad
+            })
         })
         .collect();
 }
@@ -514,12 +525,14 @@ fn assemble_pressure_equation<K: Kernel>(
         p.re,
         p.divergence_coefficient,
     );
-    add_wall_divergence(
-        &mut div_star,
-        &sim.scratch.u_start,
-        &sim.contacts,
-        p.divergence_coefficient,
-    );
+    if sim.scheme.wall_kinematics == WallKinematics::Source {
+        add_wall_divergence(
+            &mut div_star,
+            &sim.scratch.u_start,
+            &sim.contacts,
+            p.divergence_coefficient,
+        );
+    }
     let n_prev = &sim.particles.number_density;
     let div_prev = &sim.particles.number_density_rate;
     let n_star = &sim.scratch.n_star;
@@ -1058,12 +1071,15 @@ fn update_number_density_and_divergence<K: Kernel>(sim: &mut Simulation) {
         re,
         sim.params.divergence_coefficient,
     );
-    add_wall_divergence(
-        &mut div,
-        &sim.particles.velocity,
-        contacts,
-        sim.params.divergence_coefficient,
-    );
+    // the same divergence as the source's (with or without the wall's virtual points)
+    if sim.scheme.wall_kinematics == WallKinematics::Source {
+        add_wall_divergence(
+            &mut div,
+            &sim.particles.velocity,
+            contacts,
+            sim.params.divergence_coefficient,
+        );
+    }
     sim.particles.number_density = n;
     sim.particles.number_density_rate = div;
 }
