@@ -59,6 +59,9 @@ pub struct Case {
     #[serde(default)]
     pub bodies: Vec<Body>,
     pub time: TimeControl,
+    /// Sponge layers that absorb waves before they reach a tank end (none by default).
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub damping_zones: Vec<DampingZone>,
     #[serde(default)]
     pub output: Output,
     #[serde(default)]
@@ -239,6 +242,22 @@ fn default_cfl() -> f64 {
 }
 fn default_max_dt() -> f64 {
     1.0e-3
+}
+
+/// A sponge layer: past the line through `start` perpendicular to `end - start`, a
+/// particle's velocity is relaxed each step as u <- u / (1 + alpha dt), with
+/// alpha = strength s², s the fraction of the way from `start` to `end` (1 beyond
+/// `end`). Fluid at rest is untouched; waves running into the layer lose their energy
+/// instead of reflecting from the wall behind it, as in an unbounded tank.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, JsonSchema)]
+#[serde(deny_unknown_fields)]
+pub struct DampingZone {
+    /// Inner edge of the layer (no damping there), m.
+    pub start: Point,
+    /// Outer edge (full damping from there on), m.
+    pub end: Point,
+    /// Damping rate at the outer edge, 1/s.
+    pub strength: f64,
 }
 
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize, JsonSchema)]

@@ -58,7 +58,27 @@ pub fn validate(case: &Case, limits: &Limits) -> Check {
     check_bodies(case)?;
     check_overlaps(case)?;
     check_output(case)?;
+    check_damping_zones(case)?;
     check_names(case)?;
+    Ok(())
+}
+
+fn check_damping_zones(case: &Case) -> Check {
+    for (i, z) in case.damping_zones.iter().enumerate() {
+        if z.strength < 0.0 {
+            return reject(
+                format!("damping_zones[{i}].strength"),
+                format!("must be >= 0 (got {})", z.strength),
+            );
+        }
+        let length = (vec2(z.end) - vec2(z.start)).norm();
+        if length < 1e-9 {
+            return reject(
+                format!("damping_zones[{i}].end"),
+                "must differ from start: the layer runs from start to end",
+            );
+        }
+    }
     Ok(())
 }
 

@@ -104,6 +104,8 @@ pub struct Simulation {
     pub max_dt: Real,
     /// Speed above which the run is declared diverged.
     pub speed_limit: Real,
+    /// Sponge layers (case `damping_zones`): (start, unit direction, length, strength).
+    pub damping: Vec<DampingLayer>,
     /// Loads of the last step, one per wall object.
     pub loads: Vec<WallLoad>,
     pub stage_times: StageTimes,
@@ -115,6 +117,37 @@ pub struct Simulation {
     /// engine::pressure::reuse). State, not a buffer: it changes the iterates of later
     /// solves (within the solver tolerance), so it lives with the simulation it serves.
     pub(crate) solver_cache: super::pressure::SolverCache,
+}
+
+/// A sponge layer in engine form (see `case::DampingZone`).
+#[derive(Debug, Clone, Copy)]
+pub struct DampingLayer {
+    pub start: Vec2,
+    /// Unit vector from the inner to the outer edge.
+    pub direction: Vec2,
+    pub length: Real,
+    /// 1/s at the outer edge.
+    pub strength: Real,
+}
+
+impl DampingLayer {
+    pub fn new(zone: &crate::case::DampingZone) -> Self {
+        let start = vec2(zone.start);
+        let span = vec2(zone.end) - start;
+        Self {
+            start,
+            direction: span / span.norm(),
+            length: span.norm(),
+            strength: zone.strength,
+        }
+    }
+
+    /// Damping rate at `x` (1/s): strength s², s the fraction of the way into the layer.
+    #[inline]
+    pub fn rate(&self, x: Vec2) -> Real {
+        let s = ((x - self.start).dot(&self.direction) / self.length).clamp(0.0, 1.0);
+        self.strength * s * s
+    }
 }
 
 impl Simulation {
@@ -155,6 +188,7 @@ impl Simulation {
             cfl: case.time.cfl,
             max_dt: case.time.max_dt,
             speed_limit,
+            damping: case.damping_zones.iter().map(DampingLayer::new).collect(),
             loads: vec![WallLoad::default(); n_walls],
             stage_times: StageTimes::default(),
             total_solver_iterations: 0,

@@ -196,6 +196,9 @@ fn step<K: Kernel>(sim: &mut Simulation, dt: Real) -> Result<StepInfo, SimError>
     if sim.scheme.velocity_filter > 0.0 {
         filter_velocity::<K>(sim);
     }
+    if !sim.damping.is_empty() {
+        absorb_waves(sim, dt);
+    }
     keep_particles_apart(sim, &walls, dt, &mut loads);
     if sim.scheme.shifting > 0.0 {
         shift_particles::<K>(sim);
@@ -1039,6 +1042,23 @@ fn shift_particles<K: Kernel>(sim: &mut Simulation) {
     for (xi, dr) in sim.particles.position.iter_mut().zip(shift) {
         *xi += dr;
     }
+}
+
+/// Sponge layers: u <- u / (1 + alpha dt), implicit so any rate is stable. Positions
+/// of this step are already set; the damped velocity moves the particle from the next.
+fn absorb_waves(sim: &mut Simulation, dt: Real) {
+    let layers = &sim.damping;
+    let x = &sim.particles.position;
+    sim.particles
+        .velocity
+        .par_iter_mut()
+        .enumerate()
+        .for_each(|(i, u)| {
+            let alpha: Real = layers.iter().map(|l| l.rate(x[i])).sum();
+            if alpha > 0.0 {
+                *u /= 1.0 + alpha * dt;
+            }
+        });
 }
 
 fn update_number_density_and_divergence<K: Kernel>(sim: &mut Simulation) {

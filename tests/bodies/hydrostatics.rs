@@ -44,24 +44,22 @@ fn fixed_submerged_body_carries_its_buoyancy() {
 
 /// A box of half the density of water (0.4 m wide, 40 kg/m) released 1 cm above its
 /// equilibrium heaves to rest at the draft d = M / (rho b) = 0.1 m (within 2 %),
-/// measured from the mean water level (fluid volume / tank width), and its heave decays.
+/// measured from the free surface away from the box, and its heave decays: the tank is
+/// 4 m wide with sponge layers from |x| = 0.8 m to its ends (`damping_zones`), which
+/// absorb the radiated waves as an unbounded tank would.
+/// Measured: draft 0.0994 m (-0.65 %); heave amplitude 8.9 mm in the first second,
+/// 2.3 mm in the last; 95 s on two cores. Without the sponges, in the closed 2 m tank,
+/// the amplitude went 8.2 -> 7.0 mm. The level from the fluid's volume (N l0² / W) reads
+/// the draft 4.9 % low: the stirred fluid has expanded by 0.7 % (the surface far from
+/// the box stands 3.5 mm above that level), so it is printed, not asserted.
 #[test]
-#[ignore = "fails: draft -6.4 % from the mean water level (+4.5 % from the highest particle away from the box, which the waves bias up); heave amplitude 8.2 mm in the first second, 7.0 mm in the last (the closed 2 m tank keeps the radiated waves); 4 s simulated, about a minute on two cores"]
 fn floating_box_settles_at_archimedes_draft() {
     let case = shipped("floating_box.json", &[]);
     let expect = 40.0 / (RHO * 0.4);
     let l0 = case.particle_spacing;
     let mut levels = Vec::new();
     let trace = run(&case, CouplingOptions::default(), None, |sim| {
-        // free surface away from the box: top of the particles with 0.5 < |x| < 0.9
-        let top = sim
-            .particles
-            .position
-            .iter()
-            .filter(|p| p.x.abs() > 0.5 && p.x.abs() < 0.9)
-            .map(|p| p.y)
-            .fold(f64::NEG_INFINITY, f64::max);
-        levels.push(top + 0.5 * l0);
+        levels.push(surface_level(&sim.particles.position, l0));
     });
     assert!(trace.error.is_none(), "{:?}", trace.error);
     let end = trace.steps.last().unwrap().time;
@@ -76,15 +74,14 @@ fn floating_box_settles_at_archimedes_draft() {
     let mean = |idx: &[usize], f: &dyn Fn(usize) -> f64| {
         idx.iter().map(|&i| f(i)).sum::<f64>() / idx.len() as f64
     };
-    // The mean free-surface level from the fluid's volume (N l0², conserved), which the
-    // sloshing of the closed tank does not bias: h = y_tank + (N l0² + b d) / W with
-    // d = h - y_bottom gives d = (y_tank + N l0² / W - y_bottom) / (1 - b / W).
-    let (width, tank_bottom, breadth) = (2.0, -0.5, 0.4);
+    // the draft below the free surface away from the box (the reference's definition)
+    let draft = mean(&last, &|i| levels[i] - bottom[i]);
+    // second reading: the level from the fluid's volume (N l0²), which assumes the fluid
+    // keeps the lattice's density: h = y_tank + (N l0² + b d) / W, d = h - y_bottom
+    let (width, tank_bottom, breadth) = (4.0, -0.5, 0.4);
     let volume = trace.particles as f64 * l0 * l0;
-    let draft =
+    let draft_from_volume =
         (tank_bottom + volume / width - mean(&last, &|i| bottom[i])) / (1.0 - breadth / width);
-    // the highest particle away from the box, as a second reading (waves bias it up)
-    let draft_from_top = mean(&last, &|i| levels[i] - bottom[i]);
     let err = (draft - expect) / expect;
     let amplitude = |idx: &[usize]| {
         let m = mean(idx, &|i| bottom[i]);
@@ -94,7 +91,7 @@ fn floating_box_settles_at_archimedes_draft() {
     };
     let (a_first, a_last) = (amplitude(&window(0.0, 1.0)), amplitude(&last));
     println!(
-        "floating box: draft {draft:.4} m vs {expect:.4} m ({:+.2} %; from the highest particle away from the box {draft_from_top:.4} m), heave amplitude first second {:.4} m, last second {:.4} m, {} steps, {:.1} s",
+        "floating box: draft {draft:.4} m vs {expect:.4} m ({:+.2} %; from the volume level {draft_from_volume:.4} m), heave amplitude first second {:.4} m, last second {:.4} m, {} steps, {:.1} s",
         100.0 * err,
         a_first,
         a_last,
@@ -106,4 +103,19 @@ fn floating_box_settles_at_archimedes_draft() {
         a_last < 0.5 * a_first,
         "heave does not decay: {a_first:.4} -> {a_last:.4} m"
     );
+}
+
+/// Free surface away from the box: the median over lattice columns with
+/// 0.4 < |x| < 0.8 of the highest particle plus l0/2 (a median, so a splash or a
+/// particle thrown up does not move it).
+fn surface_level(x: &[mpsfsi::engine::math::Vec2], l0: f64) -> f64 {
+    let mut tops: std::collections::BTreeMap<i64, f64> = Default::default();
+    for p in x.iter().filter(|p| p.x.abs() > 0.4 && p.x.abs() < 0.8) {
+        let column = (p.x / l0).floor() as i64;
+        let top = tops.entry(column).or_insert(f64::NEG_INFINITY);
+        *top = top.max(p.y);
+    }
+    let mut v: Vec<f64> = tops.values().copied().collect();
+    v.sort_by(|a, b| a.partial_cmp(b).unwrap());
+    v[v.len() / 2] + 0.5 * l0
 }

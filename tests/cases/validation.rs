@@ -574,3 +574,25 @@ fn design_example_case_is_valid() {
     validate(&parse_case_value(v).unwrap(), &Limits::default())
         .expect("the DESIGN.md example is valid");
 }
+
+#[test]
+fn damping_zone_with_negative_strength_or_no_length() {
+    assert_error(
+        &rejected_json(|v| {
+            v["damping_zones"] =
+                json!([{ "start": [0.1, 0.0], "end": [0.2, 0.0], "strength": -1.0 }])
+        }),
+        "damping_zones[0].strength",
+        ">= 0",
+    );
+    assert_error(
+        &rejected_json(|v| {
+            v["damping_zones"] = json!([
+                { "start": [0.1, 0.0], "end": [0.2, 0.0], "strength": 5.0 },
+                { "start": [0.1, 0.0], "end": [0.1, 0.0], "strength": 5.0 }
+            ])
+        }),
+        "damping_zones[1].end",
+        "differ from start",
+    );
+}
