@@ -25,7 +25,7 @@ use super::operators::{gradient_row, laplacian_row, Cloud, LatticeConstants, Nor
 use super::pressure::{self, CsrMatrix, SolveParams};
 use super::simulation::{SimError, Simulation, StepInfo, WallLoad};
 use super::walls::pressure_load::pressure_loads;
-use super::walls::{moment_about, PlacedWall, WallContacts, WallKernels, WallWeights};
+use super::walls::{moment_about, PlacedWall, WallContact, WallContacts, WallKernels, WallWeights};
 use crate::case::{
     GradientKind, LaplacianKind, SourceKind, SpacingControl, WallKinematics, WallLoadKind,
 };
@@ -443,29 +443,33 @@ fn surface_value(rho_g: Vec2, m_hat: Vec2, l0: Real) -> Real {
 }
 
 /// The extrapolation gradient c = rho (g - a_w) of every wall contact (module docs);
-/// zero for the PND source (virtual points take p_i).
+/// zero for the PND source (virtual points take p_i). With `wall_kinematics =
+/// "neumann"` it also carries the particle's approach to the wall left over from the
+/// last step, (rho/dt) min(0, (u_i - u_w)·n) n (zero when the fluid followed the wall),
+/// so the virtual pressure behind the wall rises to push the particle back.
 fn compute_neumann_gradients(sim: &mut Simulation, dt: Real) {
     let rho = sim.params.density;
     let g = vec2(sim.params.gravity);
     let extrapolate = sim.scheme.source != SourceKind::Pnd;
-    let approach = sim.scheme.wall_kinematics == WallKinematics::Neumann;
     let contacts = &sim.contacts;
+    let base = |c: &WallContact| {
+        if extrapolate {
+            (g - c.wall_acceleration) * rho
+        } else {
+            Vec2::zeros()
+        }
+    };
+    if sim.scheme.wall_kinematics == WallKinematics::Source || !extrapolate {
+        sim.scratch.neumann = contacts.contacts.par_iter().map(base).collect();
+        return;
+    }
     let u = &sim.scratch.u_start;
     sim.scratch.neumann = (0..u.len())
         .into_par_iter()
         .flat_map_iter(|i| {
             contacts.of(i).iter().map(move |c| {
-                if !extrapolate {
-                    return Vec2::zeros();
-                }
-                let mut grad = (g - c.wall_acceleration) * rho;
-                // the approach left over from the last step (zero when the fluid followed
-                // the wall): the virtual pressure behind the wall rises to push it back
-                if approach {
-                    let un = (u[i] - c.wall_velocity).dot(&c.normal);
-                    grad += c.normal * (rho / dt * un.min(0.0));
-                }
-                grad
+                let approach = (u[i] - c.wall_velocity).dot(&c.normal).min(0.0);
+                base(c) + c.normal * (rho / dt * approach)
             })
         })
         .collect();
