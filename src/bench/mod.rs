@@ -11,8 +11,8 @@
 //!   geometry built here): RMS relative error of the surge front against Martin & Moyce
 //!   for 1 <= T <= 3, the front measured on the VTK snapshots of the run.
 //! - `wedge_30deg` (when `cases/wedge_30deg_constant_velocity.json` exists): relative
-//!   error of C_F = F / (rho V³ t) fitted over the middle of the self-similar window
-//!   against 14.04.
+//!   error of C_F = F / (rho V³ t), t from the keel contact, fitted over the middle of
+//!   the self-similar window against 14.04.
 //!
 //! Outputs in the output folder: `results.csv`, `report.md`, one `<case>.svg` of error
 //! against wall time per case (log-log, a line per variant), and `runs/` with every
@@ -457,21 +457,20 @@ pub fn score(
                 .map(|r| -(r.fx * d[0] + r.fy * d[1]))
                 .collect();
             let covered = times.last().is_some_and(|t| *t >= window.1);
-            let fit = measure::fit_force_coefficient(
-                0.0,
-                &times,
-                &force,
-                window,
-                case.fluid.density,
-                speed,
-            )
-            .filter(|_| covered);
+            let (rho, start) = (case.fluid.density, 0.0);
+            let fit =
+                measure::force_coefficient_from_contact(start, &times, &force, window, rho, speed)
+                    .filter(|_| covered);
+            let slope = measure::fit_force_coefficient(start, &times, &force, window, rho, speed);
             let (error, note) = match fit {
-                Some((cf, t0)) => (
+                Some((cf, se)) => (
                     measure::relative_error(cf, reference::WEDGE_30_FORCE_COEFFICIENT),
                     format!(
-                        "C_F = {cf:.2} (t0 = {:.2} ms; Wagner {:.2})",
-                        t0 * 1e3,
+                        "C_F = {cf:.2} ± {se:.2} from the keel contact (two-parameter slope {}; Wagner {:.2})",
+                        slope.map_or("none".into(), |(c, t0)| format!(
+                            "{c:.2}, t0 = {:.2} ms",
+                            t0 * 1e3
+                        )),
                         reference::wagner_force_coefficient(beta)
                     ),
                 ),

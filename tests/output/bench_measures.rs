@@ -1,5 +1,6 @@
 use mpsfsi::bench::measure::{
-    fit_force_coefficient, interpolate, interval_mean_after, surge_front, surge_front_rms_error,
+    fit_force_coefficient, force_coefficient_from_contact, interpolate, interval_mean_after,
+    surge_front, surge_front_rms_error,
 };
 use mpsfsi::bench::reference::MARTIN_MOYCE_SURGE;
 use mpsfsi::bench::report::{pareto_front, time_to_reach};
@@ -76,6 +77,20 @@ fn the_force_coefficient_fit_recovers_a_linear_force() {
     assert!((fitted_t0 - t0).abs() < 1e-9, "{fitted_t0}");
     assert!(
         fit_force_coefficient(0.0, &times, &force, (1.0, 2.0), rho, v).is_none(),
+        "no samples in the window"
+    );
+    // with the origin at the contact, F = C rho V³ (t - start) is recovered exactly
+    // (zero standard error); a t0 of its own is not part of that model
+    let from_contact: Vec<f64> = times
+        .iter()
+        .map(|t| c * rho * v.powi(3) * (t - 0.5 * dt - 2e-4))
+        .collect();
+    let (fitted, se) =
+        force_coefficient_from_contact(2e-4, &times, &from_contact, (3e-3, 12e-3), rho, v).unwrap();
+    assert!((fitted - c).abs() < 1e-9 * c, "{fitted}");
+    assert!(se < 1e-9 * c, "{se}");
+    assert!(
+        force_coefficient_from_contact(0.0, &times, &force, (1.0, 2.0), rho, v).is_none(),
         "no samples in the window"
     );
 }
