@@ -123,14 +123,36 @@ pub fn fit_line(points: &[(Real, Real)]) -> Option<(Real, Real)> {
     })
 }
 
+/// Interval-mean samples (`times[k]` ends the interval of `values[k]`, the first
+/// starting at `start`) as (interval midpoint, value) for the midpoints inside `window`:
+/// for a linear signal the interval mean is its value at the midpoint.
+fn window_samples(
+    start: Real,
+    times: &[Real],
+    values: &[Real],
+    window: (Real, Real),
+) -> Vec<(Real, Real)> {
+    let mut previous = start;
+    let mut points = Vec::new();
+    for (t, v) in times.iter().zip(values) {
+        let mid = 0.5 * (previous + t);
+        if mid >= window.0 && mid <= window.1 {
+            points.push((mid, *v));
+        }
+        previous = *t;
+    }
+    points
+}
+
 /// The force coefficient of a constant-velocity entry with the time origin at the keel
-/// contact (`start`, references.md's t): the one-parameter least squares of
-/// F = C rho V³ (t - start) over the interval-mean samples whose midpoints lie in
-/// `window`. Returns (C, its standard error from the scatter about the fit). The
-/// two-parameter fit below has a slope error of about 4.8/sqrt(samples) of C when the
-/// per-step force scatters by its own mean, as the wedge's does; this one about
-/// 1/sqrt(samples).
+/// contact (`contact`, references.md's t): the one-parameter least squares of
+/// F = C rho V³ (t - contact) over the interval-mean samples (as for
+/// `fit_force_coefficient`) in `window`. Returns (C, its standard error from the
+/// scatter about the fit). The two-parameter fit below has a slope error of about
+/// 4.8/sqrt(samples) of C when the per-step force scatters by its own mean, as the
+/// wedge's does; this one about 1/sqrt(samples).
 pub fn force_coefficient_from_contact(
+    contact: Real,
     start: Real,
     times: &[Real],
     force: &[Real],
@@ -139,21 +161,16 @@ pub fn force_coefficient_from_contact(
     speed: Real,
 ) -> Option<(Real, Real)> {
     let scale = density * speed.powi(3);
-    let mut previous = start;
-    let mut points = Vec::new();
-    for (t, f) in times.iter().zip(force) {
-        let mid = 0.5 * (previous + t);
-        if mid >= window.0 && mid <= window.1 {
-            points.push((mid - start, *f));
-        }
-        previous = *t;
-    }
-    let sxx: Real = points.iter().map(|p| p.0 * p.0).sum();
+    let points = window_samples(start, times, force, window);
+    let sxx: Real = points.iter().map(|p| (p.0 - contact).powi(2)).sum();
     if points.len() < 2 || sxx <= 0.0 {
         return None;
     }
-    let slope = points.iter().map(|p| p.0 * p.1).sum::<Real>() / sxx;
-    let scatter: Real = points.iter().map(|p| (p.1 - slope * p.0).powi(2)).sum();
+    let slope = points.iter().map(|p| (p.0 - contact) * p.1).sum::<Real>() / sxx;
+    let scatter: Real = points
+        .iter()
+        .map(|p| (p.1 - slope * (p.0 - contact)).powi(2))
+        .sum();
     let error = (scatter / (points.len() - 1) as Real).sqrt() / sxx.sqrt();
     Some((slope / scale, error / scale))
 }
@@ -170,15 +187,7 @@ pub fn fit_force_coefficient(
     density: Real,
     speed: Real,
 ) -> Option<(Real, Real)> {
-    let mut previous = start;
-    let mut points = Vec::new();
-    for (t, f) in times.iter().zip(force) {
-        let mid = 0.5 * (previous + t);
-        if mid >= window.0 && mid <= window.1 {
-            points.push((mid, *f));
-        }
-        previous = *t;
-    }
+    let points = window_samples(start, times, force, window);
     let (a, b) = fit_line(&points)?;
     let c = b / (density * speed.powi(3));
     (b != 0.0).then(|| (c, -a / b))

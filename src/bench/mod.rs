@@ -458,9 +458,10 @@ pub fn score(
                 .collect();
             let covered = times.last().is_some_and(|t| *t >= window.1);
             let (rho, start) = (case.fluid.density, 0.0);
-            let fit =
-                measure::force_coefficient_from_contact(start, &times, &force, window, rho, speed)
-                    .filter(|_| covered);
+            let fit = measure::force_coefficient_from_contact(
+                contact, start, &times, &force, window, rho, speed,
+            )
+            .filter(|_| covered);
             let slope = measure::fit_force_coefficient(start, &times, &force, window, rho, speed);
             let (error, note) = match fit {
                 Some((cf, se)) => (

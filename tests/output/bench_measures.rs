@@ -86,11 +86,12 @@ fn the_force_coefficient_fit_recovers_a_linear_force() {
         .map(|t| c * rho * v.powi(3) * (t - 0.5 * dt - 2e-4))
         .collect();
     let (fitted, se) =
-        force_coefficient_from_contact(2e-4, &times, &from_contact, (3e-3, 12e-3), rho, v).unwrap();
+        force_coefficient_from_contact(2e-4, 0.0, &times, &from_contact, (3e-3, 12e-3), rho, v)
+            .unwrap();
     assert!((fitted - c).abs() < 1e-9 * c, "{fitted}");
     assert!(se < 1e-9 * c, "{se}");
     assert!(
-        force_coefficient_from_contact(0.0, &times, &force, (1.0, 2.0), rho, v).is_none(),
+        force_coefficient_from_contact(0.0, 0.0, &times, &force, (1.0, 2.0), rho, v).is_none(),
         "no samples in the window"
     );
 }
