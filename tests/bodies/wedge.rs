@@ -3,6 +3,7 @@
 //! 1993). Plain Wagner (23.26) is an upper bound, von Karman (9.42) a lower bound.
 
 use crate::common::*;
+use mpsfsi::bench::measure::{fit_force_coefficient, force_coefficient_from_contact};
 use mpsfsi::coupling::CouplingOptions;
 use mpsfsi::engine::math::Vec2;
 use mpsfsi::engine::Simulation;
@@ -52,25 +53,28 @@ pub fn wedge_fit(overrides: &[String]) -> WedgeFit {
     assert!(trace.error.is_none(), "{:?}", trace.error);
     let k = trace.wall("wedge");
     let scale = RHO * V.powi(3);
-    let (mut t, mut f) = (Vec::new(), Vec::new());
-    for s in &trace.steps {
-        // the load of a step acts over it: sample it at the step's midpoint
-        let tm = s.time - 0.5 * s.dt;
-        if tm > 0.35 * T_CHINE && tm < 0.75 * T_CHINE {
-            t.push(tm);
-            f.push(s.force[k].y);
-        }
-    }
-    // origin at the keel contact: the apex starts on the undisturbed surface
-    let sxx: f64 = t.iter().map(|t| t * t).sum();
-    let c = t.iter().zip(&f).map(|(t, f)| t * f).sum::<f64>() / sxx / scale;
+    // the same estimators as the benchmark (bench::measure): each step's load is the mean
+    // over the step, sampled at its midpoint; origin at the keel contact, t = 0 (the
+    // apex starts on the undisturbed surface)
+    let times: Vec<f64> = trace.steps.iter().map(|s| s.time).collect();
+    let forces: Vec<f64> = trace.steps.iter().map(|s| s.force[k].y).collect();
+    let window = (0.35 * T_CHINE, 0.75 * T_CHINE);
+    let (c, c_error) = force_coefficient_from_contact(0.0, 0.0, &times, &forces, window, RHO, V)
+        .expect("samples in the window");
+    let (c_slope, t0_slope) =
+        fit_force_coefficient(0.0, &times, &forces, window, RHO, V).expect("samples in the window");
+    // for the printed scatter about the fit
+    let (t, f): (Vec<f64>, Vec<f64>) = trace
+        .steps
+        .iter()
+        .map(|s| (s.time - 0.5 * s.dt, s.force[k].y))
+        .filter(|(tm, _)| (window.0..=window.1).contains(tm))
+        .unzip();
     let scatter: f64 = t
         .iter()
         .zip(&f)
         .map(|(t, f)| (f - c * scale * t).powi(2))
         .sum();
-    let c_error = (scatter / (t.len() as f64 - 1.0)).sqrt() / sxx.sqrt() / scale;
-    let (a, b) = fit_line(&t, &f);
     let (mut impulse, mut ti, mut si) = (0.0, Vec::new(), Vec::new());
     for s in &trace.steps {
         impulse += s.force[k].y * s.dt;
@@ -84,8 +88,8 @@ pub fn wedge_fit(overrides: &[String]) -> WedgeFit {
         spacing: case.particle_spacing,
         c,
         c_error,
-        c_slope: b / scale,
-        t0_slope: -a / b,
+        c_slope,
+        t0_slope,
         c_impulse: bi * bi,
         t0_impulse: -ai / bi,
         profile: profile.mean(),
