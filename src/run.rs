@@ -132,6 +132,7 @@ pub fn run_case(
         sim.wall_names(),
         coupling.is_some(),
         probes,
+        case.output.energy,
     )?;
     let mut snapshots =
         crate::output::snapshots::SnapshotWriter::create(out_dir, case.output.snapshot_interval)?;

@@ -192,3 +192,48 @@ pub fn fit_force_coefficient(
     let c = b / (density * speed.powi(3));
     (b != 0.0).then(|| (c, -a / b))
 }
+
+/// The maxima of a sampled oscillating series, each refined by the parabola through
+/// the sample and its neighbours; of maxima closer than `min_separation`, the larger
+/// is kept (ripples on a crest are not crests).
+pub fn oscillation_peaks(
+    times: &[Real],
+    values: &[Real],
+    min_separation: Real,
+) -> Vec<(Real, Real)> {
+    let mut peaks: Vec<(Real, Real)> = Vec::new();
+    for i in 1..times.len().saturating_sub(1) {
+        let (a, b, c) = (values[i - 1], values[i], values[i + 1]);
+        if !(b > a && b >= c) {
+            continue;
+        }
+        let curvature = a - 2.0 * b + c;
+        let offset = if curvature < 0.0 {
+            0.5 * (a - c) / curvature
+        } else {
+            0.0
+        };
+        let h = 0.5 * (times[i + 1] - times[i - 1]);
+        let peak = (times[i] + offset * h, b - 0.25 * (a - c) * offset);
+        match peaks.last_mut() {
+            Some(last) if peak.0 - last.0 < min_separation => {
+                if peak.1 > last.1 {
+                    *last = peak;
+                }
+            }
+            _ => peaks.push(peak),
+        }
+    }
+    peaks
+}
+
+/// Exponential decay rate gamma of positive peaks (value ∝ exp(-gamma t)): the least
+/// squares line through (t, ln value). None with fewer than two peaks.
+pub fn exponential_decay_rate(peaks: &[(Real, Real)]) -> Option<Real> {
+    let logs: Option<Vec<(Real, Real)>> = peaks
+        .iter()
+        .map(|&(t, v)| (v > 0.0).then(|| (t, v.ln())))
+        .collect();
+    let (_, slope) = fit_line(&logs?)?;
+    Some(-slope)
+}

@@ -13,6 +13,10 @@
 //! - `wedge_30deg` (when `cases/wedge_30deg_constant_velocity.json` exists): relative
 //!   error of C_F = F / (rho V³ t), t from the keel contact, fitted over the middle of
 //!   the self-similar window against 14.04.
+//! - `standing_wave` (`cases/standing_wave.json`, paper 002 §5.6): relative error of
+//!   the decay rate of the kinetic-energy peaks (`energy.csv`) against the exact linear
+//!   rate (Lamb §349; Lighthill's 4 nu k² is its small-nu limit and is printed); second
+//!   measure the angular frequency from the peak spacing against omega² = g k tanh kH.
 //!
 //! Outputs in the output folder: `results.csv`, `report.md`, one `<case>.svg` of error
 //! against wall time per case (log-log, a line per variant), and `runs/` with every
@@ -163,6 +167,7 @@ pub enum Measure {
     Hydrostatic,
     DamBreak,
     Wedge,
+    StandingWave,
 }
 
 fn cases_dir() -> PathBuf {
@@ -261,6 +266,25 @@ pub fn bench_cases(quick: bool) -> io::Result<Vec<BenchCase>> {
             },
             overrides: vec![],
             measure: Measure::Wedge,
+        });
+    }
+    let wave = cases_dir().join("standing_wave.json");
+    if wave.exists() {
+        cases.push(BenchCase {
+            name: "standing_wave",
+            base: read_case_value(&wave)?,
+            spacings: if quick {
+                vec![0.025, 0.02, 0.0125]
+            } else {
+                vec![0.02, 0.0125, 0.01, 0.005]
+            },
+            // quick: three periods (six kinetic-energy peaks), else five
+            overrides: if quick {
+                vec!["time.end=2.5".into()]
+            } else {
+                vec![]
+            },
+            measure: Measure::StandingWave,
         });
     }
     Ok(cases)
@@ -409,6 +433,7 @@ pub fn score(
                 last,
             ))
         }
+        Measure::StandingWave => score_standing_wave(case, dir),
         Measure::Wedge => {
             let body = case
                 .bodies
@@ -493,6 +518,65 @@ pub fn score(
             ))
         }
     }
+}
+
+/// The standing wave's scores: the mode is one wavelength across the first fluid
+/// block (antinodes at its free-slip ends), the depth its area over its width (the
+/// cosine top integrates to zero).
+fn score_standing_wave(
+    case: &Case,
+    dir: &Path,
+) -> io::Result<(Real, String, Real, String, String)> {
+    let block = case
+        .fluid_blocks
+        .first()
+        .ok_or_else(|| io::Error::other("standing wave without a fluid block"))?;
+    let xs = block.polygon.iter().map(|p| p[0]);
+    let width = xs.clone().fold(Real::NEG_INFINITY, Real::max) - xs.fold(Real::INFINITY, Real::min);
+    let points: Vec<_> = block
+        .polygon
+        .iter()
+        .map(|p| crate::engine::math::vec2(*p))
+        .collect();
+    let depth = crate::engine::walls::geometry::signed_area(&points).abs() / width;
+    let k = 2.0 * std::f64::consts::PI / width;
+    let (g, nu) = (vec_norm(case.fluid.gravity), case.fluid.kinematic_viscosity);
+    let omega = reference::wave_frequency(g, k, depth);
+    let exact = reference::exact_energy_decay(g, nu, k)
+        .ok_or_else(|| io::Error::other("the exact decay rate did not converge"))?;
+    let text = std::fs::read_to_string(dir.join("energy.csv"))?;
+    let (mut times, mut kinetic) = (Vec::new(), Vec::new());
+    let mut reader = csv::Reader::from_reader(text.as_bytes());
+    for record in reader.records().flatten() {
+        if let (Some(Ok(t)), Some(Ok(e))) = (
+            record.get(0).map(str::parse::<Real>),
+            record.get(1).map(str::parse::<Real>),
+        ) {
+            times.push(t);
+            kinetic.push(e);
+        }
+    }
+    // the kinetic energy peaks twice a period, pi / omega apart
+    let peaks = measure::oscillation_peaks(&times, &kinetic, 0.5 * std::f64::consts::PI / omega);
+    let rate = measure::exponential_decay_rate(&peaks);
+    let measured_omega = (peaks.len() >= 2).then(|| {
+        let span = peaks[peaks.len() - 1].0 - peaks[0].0;
+        std::f64::consts::PI * (peaks.len() - 1) as Real / span
+    });
+    let note = format!(
+        "{} kinetic-energy peaks; decay rate {} 1/s (exact linear {exact:.4}, Lighthill {:.4}); omega {} rad/s (theory {omega:.4})",
+        peaks.len(),
+        rate.map_or("none".into(), |r| format!("{r:.4}")),
+        reference::lighthill_energy_decay(nu, k),
+        measured_omega.map_or("none".into(), |w| format!("{w:.4}")),
+    );
+    Ok((
+        rate.map_or(Real::NAN, |r| measure::relative_error(r, exact)),
+        "kinetic-energy decay rate vs exact linear (Lamb)".into(),
+        measured_omega.map_or(Real::NAN, |w| measure::relative_error(w, omega)),
+        "angular frequency vs omega² = g k tanh kH".into(),
+        note,
+    ))
 }
 
 fn vec_norm(v: [Real; 2]) -> Real {

@@ -157,6 +157,23 @@ pub struct Wall {
     /// The fluid side; the other side is solid (thickness is irrelevant to the model).
     #[serde(default)]
     pub fluid_side: FluidSide,
+    /// The tangential velocity condition of the viscous term (only read when the
+    /// kinematic viscosity is positive): `no_slip` (the default, a real wall) or
+    /// `free_slip` (a symmetry plane: the wall resists only the normal velocity, as the
+    /// periodic sides of paper 002's standing wave).
+    #[serde(default)]
+    pub slip: WallSlip,
+}
+
+/// Tangential velocity condition of a wall in the viscous term.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize, JsonSchema, Default)]
+#[serde(rename_all = "snake_case")]
+pub enum WallSlip {
+    /// The fluid at the wall moves with the wall (mirror velocity 2 u_w - u).
+    #[default]
+    NoSlip,
+    /// Only the normal velocity is mirrored; the tangential stress is zero.
+    FreeSlip,
 }
 
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize, JsonSchema)]
@@ -274,6 +291,10 @@ pub struct Output {
     /// Width of the zero-phase moving-average filter applied to loads (s); null: automatic.
     #[serde(default)]
     pub filter_window: Option<f64>,
+    /// Also write `energy.csv`: the fluid's kinetic and potential energy (J/m) at each
+    /// load sample (the standing-wave benchmark measures its decay from it).
+    #[serde(default)]
+    pub energy: bool,
 }
 
 fn default_load_interval() -> Option<f64> {
@@ -287,6 +308,7 @@ impl Default for Output {
             snapshot_interval: None,
             probes: Vec::new(),
             filter_window: None,
+            energy: false,
         }
     }
 }

@@ -115,6 +115,7 @@ pub fn build_scene(case: &Case, params: &MpsParameters) -> Scene {
             body: None,
             shape: WallShape::from_polyline(&pts, wall.closed, solid_left, thickness),
             state: WallState::default(),
+            free_slip: wall.slip == crate::case::WallSlip::FreeSlip,
         });
     }
     for (b, body) in case.bodies.iter().enumerate() {
@@ -124,6 +125,7 @@ pub fn build_scene(case: &Case, params: &MpsParameters) -> Scene {
             body: Some(b),
             shape: WallShape::solid_polygon(&poly),
             state: initial_body_state(case, b),
+            free_slip: false,
         });
     }
     // 3. keep the candidates outside every solid and at least l0/2 from every surface

@@ -212,6 +212,17 @@ impl Simulation {
         self.solver_cache.counts()
     }
 
+    /// Kinetic and potential energy of the fluid per unit depth (J/m): sum of m |u|²/2
+    /// and of -m g·x (zero potential at the origin).
+    pub fn fluid_energy(&self) -> (Real, Real) {
+        let m = self.params.particle_mass;
+        let g = vec2(self.params.gravity);
+        let p = &self.particles;
+        let kinetic: Real = p.velocity.iter().map(|u| u.norm_squared()).sum::<Real>() * 0.5 * m;
+        let potential: Real = -p.position.iter().map(|x| g.dot(x)).sum::<Real>() * m;
+        (kinetic, potential)
+    }
+
     /// Largest particle speed now.
     pub fn max_particle_speed(&self) -> Real {
         self.particles
@@ -233,7 +244,15 @@ impl Simulation {
             dt = dt.min(self.cfl * l0 / u);
         }
         if self.params.viscosity > 0.0 {
-            dt = dt.min(0.2 * l0 * l0 / self.params.viscosity);
+            // explicit diffusion: the strain-rate form's largest eigenvalue is (d + 2)/d
+            // times the Laplacian's (it weights r̂ r̂ by d + 2 where the Laplacian has 1)
+            let form = match self.scheme.viscosity {
+                crate::case::ViscosityKind::Laplacian => 1.0,
+                crate::case::ViscosityKind::StrainRate => {
+                    super::params::DIM / (super::params::DIM + 2.0)
+                }
+            };
+            dt = dt.min(0.2 * form * l0 * l0 / self.params.viscosity);
         }
         let g = vec2(self.params.gravity).norm();
         if g > 0.0 {

@@ -22,12 +22,14 @@ use super::kernel::Kernel;
 use super::math::{vec2, Mat2, Real, Vec2};
 use super::neighbors::NeighborList;
 use super::operators::{gradient_row, laplacian_row, Cloud, LatticeConstants, Normalisation};
+use super::params::DIM;
 use super::pressure::{self, CsrMatrix, SolveParams};
 use super::simulation::{SimError, Simulation, StepInfo, WallLoad};
 use super::walls::pressure_load::pressure_loads;
 use super::walls::{moment_about, PlacedWall, WallContact, WallContacts, WallKernels, WallWeights};
 use crate::case::{
-    GradientKind, LaplacianKind, SourceKind, SpacingControl, WallKinematics, WallLoadKind,
+    GradientKind, LaplacianKind, SourceKind, SpacingControl, ViscosityKind, WallKinematics,
+    WallLoadKind,
 };
 use crate::with_kernel;
 use rayon::prelude::*;
@@ -236,7 +238,7 @@ fn step<K: Kernel>(sim: &mut Simulation, dt: Real) -> Result<StepInfo, SimError>
     })
 }
 
-/// Gravity and (when nu > 0) viscosity with no-slip walls.
+/// Gravity and (when nu > 0) viscosity with no-slip (or free-slip) walls.
 fn apply_explicit_forces<K: Kernel>(
     sim: &mut Simulation,
     weights: &KernelWeights<K>,
@@ -256,6 +258,8 @@ fn apply_explicit_forces<K: Kernel>(
     let c = sim.params.laplacian_coefficient;
     let (x, u) = (&sim.particles.position, &sim.particles.velocity);
     let (nb, contacts) = (&sim.neighbors, &sim.contacts);
+    let free_slip: Vec<bool> = sim.walls.iter().map(|w| w.free_slip).collect();
+    let form = sim.scheme.viscosity;
     // a particle created after the last neighbour search has no list yet
     let accel: Vec<(Vec2, Vec2)> = (0..x.len())
         .into_par_iter()
@@ -266,13 +270,28 @@ fn apply_explicit_forces<K: Kernel>(
             let mut lap = Vec2::zeros();
             for &j in nb.of(i) {
                 let j = j as usize;
-                let r = (x[j] - x[i]).norm();
-                lap += (u[j] - u[i]) * weights.laplacian(r);
+                let rij = x[j] - x[i];
+                let r = rij.norm();
+                let du = u[j] - u[i];
+                lap += match form {
+                    ViscosityKind::Laplacian => du * weights.laplacian(r),
+                    ViscosityKind::StrainRate if r > 0.0 => {
+                        rij * ((DIM + 2.0) * du.dot(&rij) / (r * r) * weights.laplacian(r))
+                    }
+                    ViscosityKind::StrainRate => Vec2::zeros(),
+                };
             }
             let mut wall = Vec2::zeros();
             for ct in contacts.of(i) {
-                // mirror velocity 2 u_w - u_i (no slip)
-                wall += (ct.wall_velocity - u[i]) * (2.0 * ct.terms.laplacian_sum);
+                // mirror velocity 2 u_w - u_i (no slip); free slip mirrors the
+                // normal component only, so the wall exerts no shear
+                let relative = ct.wall_velocity - u[i];
+                let mirrored = if free_slip[ct.object as usize] {
+                    ct.normal * relative.dot(&ct.normal)
+                } else {
+                    relative
+                };
+                wall += mirrored * (2.0 * ct.terms.laplacian_sum);
             }
             (g + (lap + wall) * (nu * c), wall * (nu * c))
         })

@@ -1,5 +1,5 @@
 //! The run directory of DESIGN.md §2.3: loads.csv, bodies.csv, probes.csv and
-//! summary.json. Rows are flushed as they are written so a running job can be read.
+//! summary.json, plus energy.csv (fluid kinetic and potential energy) when asked for. Rows are flushed as they are written so a running job can be read.
 //!
 //! Sampling: a row of loads.csv at time t is the mean force over the sample interval
 //! that ends at t (impulse / interval), so the integral of the sampled force equals
@@ -20,6 +20,7 @@ use std::path::Path;
 pub const LOADS_HEADER: &str = "time,body,fx,fy,mz";
 pub const BODIES_HEADER: &str = "time,body,x,y,angle,vx,vy,omega";
 pub const PROBES_HEADER: &str = "time,probe,pressure";
+pub const ENERGY_HEADER: &str = "time,kinetic_energy,potential_energy,particles";
 
 /// Kinematics of one body at a sample time (x, y: centre of mass).
 #[derive(Debug, Clone, PartialEq)]
@@ -43,6 +44,7 @@ pub struct RunWriter {
     loads: BufWriter<File>,
     bodies: Option<BufWriter<File>>,
     probes: Option<(BufWriter<File>, Vec<probes::ProbePoint>)>,
+    energy: Option<BufWriter<File>>,
 }
 
 fn csv_file(path: &Path, header: &str) -> std::io::Result<BufWriter<File>> {
@@ -59,6 +61,7 @@ impl RunWriter {
         wall_names: Vec<String>,
         has_bodies: bool,
         probes: Vec<probes::ProbePoint>,
+        energy: bool,
     ) -> std::io::Result<Self> {
         std::fs::create_dir_all(dir)?;
         let n = wall_names.len();
@@ -78,6 +81,11 @@ impl RunWriter {
                 None
             } else {
                 Some((csv_file(&dir.join("probes.csv"), PROBES_HEADER)?, probes))
+            },
+            energy: if energy {
+                Some(csv_file(&dir.join("energy.csv"), ENERGY_HEADER)?)
+            } else {
+                None
             },
         })
     }
@@ -136,6 +144,16 @@ impl RunWriter {
             }
             w.flush()?;
         }
+        if let Some(w) = &mut self.energy {
+            // the state at the sample time, not an interval mean
+            let (kinetic, potential) = sim.fluid_energy();
+            writeln!(
+                w,
+                "{t:.9e},{kinetic:.9e},{potential:.9e},{}",
+                sim.particle_count()
+            )?;
+            w.flush()?;
+        }
         self.last_sample = t;
         if let Some(iv) = self.interval {
             while self.next_sample <= t * (1.0 + 1e-12) {
@@ -151,6 +169,9 @@ impl RunWriter {
             w.flush()?;
         }
         if let Some((w, _)) = &mut self.probes {
+            w.flush()?;
+        }
+        if let Some(w) = &mut self.energy {
             w.flush()?;
         }
         Ok(())

@@ -24,6 +24,7 @@ fn placed(shape: WallShape) -> PlacedWall {
         body: None,
         shape,
         state: WallState::default(),
+        free_slip: false,
     };
     PlacedWall::new(&object, WallState::default())
 }

@@ -40,6 +40,7 @@ fn tank(l0: f64) -> (PlacedWall, Vec<Vec2>, MpsParameters) {
         body: None,
         shape,
         state: WallState::default(),
+        free_slip: false,
     };
     let placed = PlacedWall::new(&object, WallState::default());
     let n = (1.0 / l0).round() as usize;

@@ -1,6 +1,6 @@
 use mpsfsi::bench::measure::{
-    fit_force_coefficient, force_coefficient_from_contact, interpolate, interval_mean_after,
-    surge_front, surge_front_rms_error,
+    exponential_decay_rate, fit_force_coefficient, force_coefficient_from_contact, interpolate,
+    interval_mean_after, oscillation_peaks, surge_front, surge_front_rms_error,
 };
 use mpsfsi::bench::reference::MARTIN_MOYCE_SURGE;
 use mpsfsi::bench::report::{pareto_front, time_to_reach};
@@ -342,4 +342,39 @@ fn the_hydrostatic_score_compares_the_tank_load_with_the_water_weight() {
             .is_nan(),
         "a failed tank is not scored"
     );
+}
+
+#[test]
+fn peaks_of_a_sampled_decaying_oscillation_give_its_rate_and_frequency() {
+    // E = exp(-0.7 t) cos²(7.8 t): peaks pi/7.8 apart, sampled every 5 ms as energy.csv is
+    let (gamma, omega) = (0.7, 7.8);
+    let t: Vec<f64> = (0..800).map(|k| 0.005 * k as f64).collect();
+    let e: Vec<f64> = t
+        .iter()
+        .map(|t| (-gamma * t).exp() * (omega * t).cos().powi(2))
+        .collect();
+    let peaks = oscillation_peaks(&t, &e, 0.5 * std::f64::consts::PI / omega);
+    // t = 0 is a maximum at the series' start: not a detected interior peak
+    assert_eq!(peaks.len(), 9, "{peaks:?}");
+    let rate = exponential_decay_rate(&peaks).unwrap();
+    assert!((rate / gamma - 1.0).abs() < 0.01, "rate {rate}");
+    let spacing = (peaks[8].0 - peaks[0].0) / 8.0;
+    assert!((std::f64::consts::PI / spacing / omega - 1.0).abs() < 0.002);
+    // a ripple within the separation is not a second peak
+    let mut rippled = e.clone();
+    rippled[10] += 0.5;
+    assert_eq!(oscillation_peaks(&t, &rippled, 0.2).len(), 9 + 1);
+}
+
+#[test]
+fn the_exact_viscous_wave_decay_tends_to_lighthills_and_stays_below_it() {
+    use mpsfsi::bench::reference::{exact_energy_decay, lighthill_energy_decay};
+    let k = 2.0 * std::f64::consts::PI;
+    for (nu, tolerance) in [(1.0e-6, 0.002), (1.0e-4, 0.02)] {
+        let ratio = exact_energy_decay(9.81, nu, k).unwrap() / lighthill_energy_decay(nu, k);
+        assert!((ratio - 1.0).abs() < tolerance, "nu {nu}: ratio {ratio}");
+    }
+    // the correction grows like sqrt(nu k² / omega): 13 % at the shipped nu = 5e-3
+    let ratio = exact_energy_decay(9.81, 5.0e-3, k).unwrap() / lighthill_energy_decay(5.0e-3, k);
+    assert!(ratio > 0.85 && ratio < 0.9, "ratio {ratio}");
 }

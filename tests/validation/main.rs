@@ -1,8 +1,10 @@
-//! Physics validation against references (../shared/references.md): hydrostatics and
-//! the Martin & Moyce dam break. Cases are the shipped files in cases/.
+//! Physics validation against references (../shared/references.md): hydrostatics, the
+//! Martin & Moyce dam break and the viscous standing wave. Cases are the shipped files
+//! in cases/.
 
 mod dam_break;
 mod hydrostatic;
+mod standing_wave;
 
 use mpsfsi::case::{load_case_file, Case};
 use std::path::PathBuf;

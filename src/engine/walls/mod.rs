@@ -70,6 +70,8 @@ pub struct WallObject {
     /// Shape in the object frame.
     pub shape: WallShape,
     pub state: WallState,
+    /// The viscous term mirrors only the normal velocity (a symmetry plane).
+    pub free_slip: bool,
 }
 
 /// A wall object placed in the world for one step.
