@@ -262,7 +262,8 @@ pub fn bench_cases(quick: bool) -> io::Result<Vec<BenchCase>> {
             spacings: if quick {
                 vec![0.04, 0.03, 0.02]
             } else {
-                vec![0.02, 0.01, 0.0075, 0.005]
+                // 2 m / l0 a whole number of columns (7.5 mm is not)
+                vec![0.02, 0.01, 0.008, 0.005]
             },
             overrides: vec![],
             measure: Measure::Wedge,
@@ -276,7 +277,7 @@ pub fn bench_cases(quick: bool) -> io::Result<Vec<BenchCase>> {
             spacings: if quick {
                 vec![0.025, 0.02, 0.0125]
             } else {
-                vec![0.02, 0.0125, 0.01, 0.005]
+                vec![0.025, 0.0125, 0.01, 0.00625]
             },
             // quick: three periods (six kinetic-energy peaks), else five
             overrides: if quick {

@@ -156,7 +156,7 @@ pub enum ViscosityKind {
     /// half the physical -2 nu ∫ e:e of an irrotational flow (Colagrossi et al. 2011):
     /// a standing wave then decays at half Lighthill's rate.
     Laplacian,
-    /// The divergence of the strain rate, (d + 2) c Σ w_L ((u_j - u_i)·r̂) r̂ r̂, the MPS
+    /// The divergence of the strain rate, (d + 2) c Σ w_L ((u_j - u_i)·r̂) r̂, the MPS
     /// form of the Monaghan–Cleary term: the same ∇²u + 2∇(∇·u) = ∇²u in the bulk of an
     /// incompressible flow, and its dissipation is -2 nu ∫ e:e, so a cut kernel at the
     /// free surface is the stress-free condition. Walls enter as in `laplacian` (the

