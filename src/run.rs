@@ -67,6 +67,12 @@ pub struct Summary {
     pub wall_time_s: f64,
     pub particles: usize,
     pub particles_removed: usize,
+    /// Of `particles_removed`, those removed for exceeding the speed limit
+    /// (`scheme.runaway_allowance`), and the first of them.
+    #[serde(default)]
+    pub particles_runaway: usize,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub first_runaway: Option<String>,
     pub max_velocity: Real,
     pub min_dt: Real,
     pub max_dt: Real,
@@ -215,6 +221,8 @@ pub fn run_case(
         wall_time_s: started.elapsed().as_secs_f64(),
         particles: sim.particle_count(),
         particles_removed: sim.removed,
+        particles_runaway: sim.runaways,
+        first_runaway: sim.first_runaway.clone(),
         max_velocity,
         min_dt: if min_dt.is_finite() { min_dt } else { 0.0 },
         max_dt,

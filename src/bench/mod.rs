@@ -60,6 +60,8 @@ pub struct BenchOptions {
     /// Skip the run-time-against-error study (it is skipped anyway with `scaling` or
     /// `features`).
     pub no_study: bool,
+    /// Only the study cases with these names; empty: all.
+    pub cases: Vec<String>,
     /// Sizes, steps and repeats of `scaling` / `features`.
     pub scaling_options: scaling::ScalingOptions,
     pub out_dir: PathBuf,
@@ -75,6 +77,7 @@ impl BenchOptions {
             scaling: false,
             features: false,
             no_study: false,
+            cases: Vec::new(),
             scaling_options: scaling::ScalingOptions::default(),
             out_dir,
         }
@@ -719,7 +722,17 @@ pub fn run(options: BenchOptions) -> io::Result<()> {
         scaling::write_features(&options.out_dir, options.scaling_options.repeats)?;
     }
     let mut results = Vec::new();
-    let cases = bench_cases(options.quick)?;
+    let mut cases = bench_cases(options.quick)?;
+    if !options.cases.is_empty() {
+        let known: Vec<&str> = cases.iter().map(|c| c.name).collect();
+        if let Some(unknown) = options.cases.iter().find(|n| !known.contains(&n.as_str())) {
+            return Err(io::Error::new(
+                io::ErrorKind::InvalidInput,
+                format!("unknown case {unknown:?}; the study has {known:?}"),
+            ));
+        }
+        cases.retain(|c| options.cases.iter().any(|n| n == c.name));
+    }
     if options.runs_study() {
         for bench in &cases {
             for variant in variants() {

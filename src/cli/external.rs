@@ -30,6 +30,7 @@ pub fn bench(args: BenchArgs) -> i32 {
         scaling: args.scaling,
         features: args.features,
         no_study: args.no_study,
+        cases: args.cases,
         scaling_options: mpsfsi::bench::scaling::ScalingOptions {
             max_particles: args.max_particles,
             steps: args.scaling_steps,

@@ -82,6 +82,10 @@ pub struct BenchArgs {
     /// Skip the run-time-against-error study (e.g. `--stress --no-study`).
     #[arg(long)]
     pub no_study: bool,
+    /// Only these reference cases of the study (repeatable): hydrostatic, dam_break,
+    /// wedge_30deg, standing_wave. Default: all.
+    #[arg(long = "case", value_name = "NAME")]
+    pub cases: Vec<String>,
     /// Largest size of `--scaling` (640000 and 1300000 are the large sizes).
     #[arg(long, default_value_t = 160_000)]
     pub max_particles: usize,

@@ -26,8 +26,15 @@ pub fn run(case_path: &Path, out: &Path, overrides: &[String]) -> i32 {
     observer.finish();
     match result {
         Ok(summary) => {
+            let runaway = match &summary.first_runaway {
+                Some(first) => format!(
+                    ", {} of them runaways (the first: {first})",
+                    summary.particles_runaway
+                ),
+                None => String::new(),
+            };
             let line = format!(
-                "{} steps to t = {:.6} s, {} particles ({} removed), max speed {:.3} m/s, {:.1} s wall time; results in {}",
+                "{} steps to t = {:.6} s, {} particles ({} removed{runaway}), max speed {:.3} m/s, {:.1} s wall time; results in {}",
                 summary.steps,
                 summary.simulated_time,
                 summary.particles,

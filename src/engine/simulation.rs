@@ -104,6 +104,11 @@ pub struct Simulation {
     pub max_dt: Real,
     /// Speed above which the run is declared diverged.
     pub speed_limit: Real,
+    /// Particles removed so far for exceeding `speed_limit`, and how many may be.
+    pub runaways: usize,
+    pub runaway_budget: usize,
+    /// Step, time, particle and speed of the first runaway removed.
+    pub first_runaway: Option<String>,
     /// Sponge layers (case `damping_zones`): (start, unit direction, length, strength).
     pub damping: Vec<DampingLayer>,
     /// Loads of the last step, one per wall object.
@@ -175,6 +180,7 @@ impl Simulation {
             .max_speed
             .unwrap_or(10.0 * ((2.0 * g * height).sqrt() + fastest) + 1.0);
         let n_walls = walls.len();
+        let particle_count = particles.len();
         let mut sim = Self {
             params,
             scheme: case.scheme.clone().resolved(),
@@ -188,6 +194,10 @@ impl Simulation {
             cfl: case.time.cfl,
             max_dt: case.time.max_dt,
             speed_limit,
+            runaways: 0,
+            runaway_budget: (case.scheme.runaway_allowance.max(0.0) * particle_count as Real)
+                .floor() as usize,
+            first_runaway: None,
             damping: case.damping_zones.iter().map(DampingLayer::new).collect(),
             loads: vec![WallLoad::default(); n_walls],
             stage_times: StageTimes::default(),

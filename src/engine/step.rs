@@ -225,7 +225,7 @@ fn step<K: Kernel>(sim: &mut Simulation, dt: Real) -> Result<StepInfo, SimError>
     sim.time += dt;
     sim.steps += 1;
     sim.total_solver_iterations += iterations as u64;
-    let removed = remove_particles_outside_domain(sim);
+    let removed = remove_particles_outside_domain(sim) + remove_runaways(sim);
     let max_speed = check_health(sim)?;
     sim.stage_times.bookkeeping += seconds(&mut clock);
     Ok(StepInfo {
@@ -1218,6 +1218,42 @@ fn remove_particles_outside_domain(sim: &mut Simulation) -> usize {
         .iter()
         .map(|p| p.x >= lo.x && p.y >= lo.y && p.x <= hi.x && p.y <= hi.y)
         .collect();
+    remove_particles(sim, &keep)
+}
+
+/// Remove the particles faster than the speed limit while the allowance
+/// (`scheme.runaway_allowance`) lasts; past it they stay, and `check_health` fails the
+/// run on the first. A non-finite velocity is never removed: that is a diverged step.
+fn remove_runaways(sim: &mut Simulation) -> usize {
+    let limit = sim.speed_limit;
+    let fast: Vec<usize> = (0..sim.particles.len())
+        .filter(|&i| sim.particles.velocity[i].norm() > limit)
+        .collect();
+    if fast.is_empty() || sim.runaways + fast.len() > sim.runaway_budget {
+        return 0;
+    }
+    if sim.first_runaway.is_none() {
+        let i = fast[0];
+        let (x, u) = (sim.particles.position[i], sim.particles.velocity[i]);
+        sim.first_runaway = Some(format!(
+            "step {}, t = {:.6} s: particle {i} at ({:.4}, {:.4}) reached {:.3} m/s (limit {limit:.3} m/s)",
+            sim.steps,
+            sim.time,
+            x.x,
+            x.y,
+            u.norm()
+        ));
+    }
+    sim.runaways += fast.len();
+    let mut keep = vec![true; sim.particles.len()];
+    for i in fast {
+        keep[i] = false;
+    }
+    remove_particles(sim, &keep)
+}
+
+/// Keep the particles flagged in `keep` (counted in `sim.removed`), with their lists.
+fn remove_particles(sim: &mut Simulation, keep: &[bool]) -> usize {
     let removed = keep.iter().filter(|k| !**k).count();
     if removed > 0 {
         sim.particles.retain(&keep);

@@ -84,3 +84,65 @@ fn still_water(end: f64) {
     );
     std::fs::remove_dir_all(&dir).ok();
 }
+
+/// A lone splash particle thrown out at 100 m/s (above the case's `max_speed` of 50 m/s)
+/// is removed and counted (`scheme.runaway_allowance`), and the still water around it
+/// keeps carrying its weight: tank load = remaining particles × rho l0² g within 1 %.
+/// With no allowance the same particle fails the run with its diagnosis.
+#[test]
+fn a_lone_runaway_particle_is_removed_and_the_tank_stays_hydrostatic() {
+    let (rho, g, l0) = (1000.0, 9.81, 0.02);
+    // one lattice site at (0.51, 0.61), well above the surface (0.5 m)
+    let blocks = concat!(
+        r#"fluid_blocks=[{"polygon": [[0.0, 0.0], [1.0, 0.0], [1.0, 0.5], [0.0, 0.5]]},"#,
+        r#"{"polygon": [[0.5, 0.6], [0.52, 0.6], [0.52, 0.62], [0.5, 0.62]], "velocity": [0.0, 100.0]}]"#
+    );
+    let base = [
+        "particle_spacing=0.02",
+        "time.end=0.3",
+        "scheme.max_speed=50.0",
+        "output.probes=[]",
+        blocks,
+    ];
+    let case = shipped_case("hydrostatic.json", &base);
+    let mut sim = mpsfsi::engine::Simulation::new(&case);
+    assert_eq!(
+        sim.particle_count(),
+        1251,
+        "the tank and one spray particle"
+    );
+    let mut load = Vec::new();
+    while sim.time < case.time.end {
+        let dt = sim.next_dt();
+        sim.step(dt).unwrap_or_else(|e| panic!("{e}"));
+        if sim.time > 0.1 {
+            load.push(sim.loads[0].force.y);
+        }
+    }
+    assert_eq!(sim.runaways, 1);
+    assert_eq!(sim.particle_count(), 1250);
+    let first = sim
+        .first_runaway
+        .clone()
+        .expect("the first runaway is described");
+    assert!(
+        first.contains("100.") && first.contains("step 1,"),
+        "{first}"
+    );
+    let mean = load.iter().sum::<f64>() / load.len() as f64;
+    let weight = -(sim.particle_count() as f64) * rho * l0 * l0 * g;
+    assert!(
+        (mean / weight - 1.0).abs() < 0.01,
+        "tank load {mean:.2} N/m vs weight {weight:.2}"
+    );
+
+    let mut strict: Vec<&str> = base.to_vec();
+    strict.push("scheme.runaway_allowance=0");
+    let case = shipped_case("hydrostatic.json", &strict);
+    let mut sim = mpsfsi::engine::Simulation::new(&case);
+    let dt = sim.next_dt();
+    let err = sim
+        .step(dt)
+        .expect_err("no allowance: the runaway fails the run");
+    assert!(err.to_string().contains("runaway velocity"), "{err}");
+}
