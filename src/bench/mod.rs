@@ -316,7 +316,9 @@ pub fn column_geometry(case: &Case) -> Option<ColumnGeometry> {
     })
 }
 
-/// Build the case of one run: base + overrides + spacing + variant scheme.
+/// Build the case of one run: base + overrides + spacing + variant scheme. The variant
+/// sets the fields in which it differs from the default scheme; the case's own scheme
+/// settings stay otherwise (the wedge's `max_speed`, for one).
 pub fn run_case_value(
     bench: &BenchCase,
     spacing: Real,
@@ -327,7 +329,18 @@ pub fn run_case_value(
         case::apply_override(&mut v, o)?;
     }
     case::apply_override(&mut v, &format!("particle_spacing={spacing}"))?;
-    v["scheme"] = serde_json::to_value(scheme).expect("a scheme serialises");
+    let variant = serde_json::to_value(scheme).expect("a scheme serialises");
+    let default = serde_json::to_value(Scheme::default()).expect("a scheme serialises");
+    if !v["scheme"].is_object() {
+        v["scheme"] = json!({});
+    }
+    if let (Some(fields), Some(defaults)) = (variant.as_object(), default.as_object()) {
+        for (key, value) in fields {
+            if defaults.get(key) != Some(value) {
+                v["scheme"][key] = value.clone();
+            }
+        }
+    }
     case::parse_case_value(v)
 }
 

@@ -378,3 +378,28 @@ fn the_exact_viscous_wave_decay_tends_to_lighthills_and_stays_below_it() {
     let ratio = exact_energy_decay(9.81, 5.0e-3, k).unwrap() / lighthill_energy_decay(5.0e-3, k);
     assert!(ratio > 0.85 && ratio < 0.9, "ratio {ratio}");
 }
+
+#[test]
+fn a_variant_changes_its_own_scheme_fields_and_keeps_the_cases_other_settings() {
+    use mpsfsi::bench::{bench_cases, run_case_value, variants};
+    use mpsfsi::case::{GradientKind, Scheme};
+    let cases = bench_cases(true).unwrap();
+    let wedge = cases.iter().find(|c| c.name == "wedge_30deg").unwrap();
+    let classic = variants()
+        .into_iter()
+        .find(|v| v.name == "classic")
+        .unwrap();
+    let case = run_case_value(wedge, 0.04, &classic.scheme).unwrap();
+    // the shipped wedge raises the runaway guard to 150 m/s; the variant does not touch it
+    assert_eq!(case.scheme.max_speed, Some(150.0));
+    assert_eq!(case.scheme.gradient, GradientKind::MinimumPressure);
+    assert_eq!(case.scheme.velocity_filter, 0.0);
+    assert_eq!(case.particle_spacing, 0.04);
+    let default = variants()
+        .into_iter()
+        .find(|v| v.name == "default")
+        .unwrap();
+    let case = run_case_value(wedge, 0.04, &default.scheme).unwrap();
+    assert_eq!(case.scheme.gradient, Scheme::default().gradient);
+    assert_eq!(case.scheme.max_speed, Some(150.0));
+}
