@@ -309,7 +309,7 @@ fn wedge_force_coefficient_converges_with_spacing() {
 /// The shipped tank (2 m x 1 m of water) is large enough: doubling it changes C_F by
 /// less than 1 % (at 1 cm spacing, where the doubled tank is 80 000 particles).
 #[test]
-#[ignore = "fails: C_F 15.61 ± 1.15 -> 16.45 ± 1.17 (+5.4 %) with the tank doubled at 1 cm, a change the per-step scatter cannot resolve to 1 %; 80 000 particles, about a minute"]
+#[ignore = "fails: C_F 15.61 ± 1.15 -> 16.45 ± 1.17 (+5.4 %) with the tank doubled at 1 cm, a change the per-step scatter cannot resolve to 1 %; ensembles of 4 offsets read 14.71 ± 0.39 (shipped) and 14.24 ± 0.79 (doubled), -3.2 ± 6 %; 80 000 particles, about a minute"]
 fn wedge_tank_is_large_enough() {
     let base = wedge_fit(&["particle_spacing=0.01".into()]);
     let mut doubled = vec!["particle_spacing=0.01".to_string()];
