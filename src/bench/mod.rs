@@ -563,17 +563,8 @@ fn score_standing_wave(
     let exact = reference::exact_energy_decay(g, nu, k)
         .ok_or_else(|| io::Error::other("the exact decay rate did not converge"))?;
     let text = std::fs::read_to_string(dir.join("energy.csv"))?;
-    let (mut times, mut kinetic) = (Vec::new(), Vec::new());
-    let mut reader = csv::Reader::from_reader(text.as_bytes());
-    for record in reader.records().flatten() {
-        if let (Some(Ok(t)), Some(Ok(e))) = (
-            record.get(0).map(str::parse::<Real>),
-            record.get(1).map(str::parse::<Real>),
-        ) {
-            times.push(t);
-            kinetic.push(e);
-        }
-    }
+    // columns time, kinetic_energy
+    let (times, kinetic) = csv_columns(&text, (0, 1), |_| true);
     // the kinetic energy peaks twice a period, pi / omega apart
     let peaks = measure::oscillation_peaks(&times, &kinetic, 0.5 * std::f64::consts::PI / omega);
     let rate = measure::exponential_decay_rate(&peaks);
@@ -609,20 +600,29 @@ fn vec_norm(v: [Real; 2]) -> Real {
 }
 
 fn probe_series(text: &str, name: &str) -> (Vec<Real>, Vec<Real>) {
+    // columns time, probe, pressure
+    csv_columns(text, (0, 2), |record| record.get(1) == Some(name))
+}
+
+/// Two numeric columns of a CSV text (header skipped), for the records `keep` accepts;
+/// records whose fields do not parse are skipped.
+fn csv_columns(
+    text: &str,
+    (x, y): (usize, usize),
+    keep: impl Fn(&csv::StringRecord) -> bool,
+) -> (Vec<Real>, Vec<Real>) {
     let mut reader = csv::Reader::from_reader(text.as_bytes());
-    let (mut t, mut p) = (Vec::new(), Vec::new());
-    for record in reader.records().flatten() {
-        if record.get(1) == Some(name) {
-            if let (Some(Ok(a)), Some(Ok(b))) = (
-                record.get(0).map(str::parse::<Real>),
-                record.get(2).map(str::parse::<Real>),
-            ) {
-                t.push(a);
-                p.push(b);
-            }
+    let (mut xs, mut ys) = (Vec::new(), Vec::new());
+    for record in reader.records().flatten().filter(|r| keep(r)) {
+        if let (Some(Ok(a)), Some(Ok(b))) = (
+            record.get(x).map(str::parse::<Real>),
+            record.get(y).map(str::parse::<Real>),
+        ) {
+            xs.push(a);
+            ys.push(b);
         }
     }
-    (t, p)
+    (xs, ys)
 }
 
 /// (T, Z) of the surge front read from the run's VTK snapshots.

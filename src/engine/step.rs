@@ -1225,8 +1225,13 @@ fn remove_particles_outside_domain(sim: &mut Simulation) -> usize {
 /// (`scheme.runaway_allowance`) lasts; past it they stay, and `check_health` fails the
 /// run on the first. A non-finite velocity is never removed: that is a diverged step.
 fn remove_runaways(sim: &mut Simulation) -> usize {
+    // no allowance left: nothing to scan for, check_health reports the first runaway
+    if sim.runaways >= sim.runaway_budget {
+        return 0;
+    }
     let limit = sim.speed_limit;
     let fast: Vec<usize> = (0..sim.particles.len())
+        .into_par_iter()
         .filter(|&i| sim.particles.velocity[i].norm() > limit)
         .collect();
     if fast.is_empty() || sim.runaways + fast.len() > sim.runaway_budget {
