@@ -62,6 +62,8 @@ pub struct BenchOptions {
     pub no_study: bool,
     /// Only the study cases with these names; empty: all.
     pub cases: Vec<String>,
+    /// Only the scheme variants with these names (study and CFL sweep); empty: all.
+    pub variants: Vec<String>,
     /// Sizes, steps and repeats of `scaling` / `features`.
     pub scaling_options: scaling::ScalingOptions,
     pub out_dir: PathBuf,
@@ -78,6 +80,7 @@ impl BenchOptions {
             features: false,
             no_study: false,
             cases: Vec::new(),
+            variants: Vec::new(),
             scaling_options: scaling::ScalingOptions::default(),
             out_dir,
         }
@@ -134,6 +137,28 @@ pub fn variants() -> Vec<Variant> {
             },
         },
     ]
+}
+
+/// The items whose names are in `wanted` (all when it is empty); an unknown name is an
+/// error listing the known ones.
+fn select<T>(
+    what: &str,
+    mut items: Vec<T>,
+    wanted: &[String],
+    name: impl Fn(&T) -> &'static str,
+) -> io::Result<Vec<T>> {
+    if wanted.is_empty() {
+        return Ok(items);
+    }
+    let known: Vec<&str> = items.iter().map(&name).collect();
+    if let Some(unknown) = wanted.iter().find(|n| !known.contains(&n.as_str())) {
+        return Err(io::Error::new(
+            io::ErrorKind::InvalidInput,
+            format!("unknown {what} {unknown:?}; the study has {known:?}"),
+        ));
+    }
+    items.retain(|item| wanted.iter().any(|n| n == name(item)));
+    Ok(items)
 }
 
 /// One benchmark run, one line of `results.csv`.
@@ -743,22 +768,15 @@ pub fn run(options: BenchOptions) -> io::Result<()> {
         scaling::write_features(&options.out_dir, options.scaling_options.repeats)?;
     }
     let mut results = Vec::new();
-    let mut cases = bench_cases(options.quick)?;
-    if !options.cases.is_empty() {
-        let known: Vec<&str> = cases.iter().map(|c| c.name).collect();
-        if let Some(unknown) = options.cases.iter().find(|n| !known.contains(&n.as_str())) {
-            return Err(io::Error::new(
-                io::ErrorKind::InvalidInput,
-                format!("unknown case {unknown:?}; the study has {known:?}"),
-            ));
-        }
-        cases.retain(|c| options.cases.iter().any(|n| n == c.name));
-    }
+    let cases = select("case", bench_cases(options.quick)?, &options.cases, |c| {
+        c.name
+    })?;
+    let variants = select("variant", variants(), &options.variants, |v| v.name)?;
     if options.runs_study() {
         for bench in &cases {
-            for variant in variants() {
+            for variant in &variants {
                 for &spacing in &bench.spacings {
-                    let r = run_one(bench, &variant, spacing, &runs_dir);
+                    let r = run_one(bench, variant, spacing, &runs_dir);
                     eprintln!(
                         "bench {:<12} {:<14} l0 = {:<9.5} {:>7} particles {:>6} steps {:>8.2} s  error {:.4e}  {}",
                         r.case, r.variant, r.spacing, r.particles, r.steps, r.wall_time_s, r.error, r.note
@@ -777,7 +795,7 @@ pub fn run(options: BenchOptions) -> io::Result<()> {
             options.out_dir.join("stress.md"),
             stress::stress_markdown(&stress_rows, &[], options.quick),
         )?;
-        cfl = report::cfl_sweep(&cases, &runs_dir.join("stress"));
+        cfl = report::cfl_sweep(&cases, &variants, &runs_dir.join("stress"));
         std::fs::write(
             options.out_dir.join("stress.md"),
             stress::stress_markdown(&stress_rows, &cfl, options.quick),

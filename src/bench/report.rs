@@ -2,7 +2,7 @@
 //! computed from the results), one SVG per case (error against wall time), and the
 //! CFL sweep of `--stress`.
 
-use super::{run_one, variants, BenchCase, BenchResult, Measure};
+use super::{run_one, variants, BenchCase, BenchResult, Measure, Variant};
 use crate::engine::math::Real;
 use crate::output::plot::{log_log_svg, Series};
 use std::fmt::Write as _;
@@ -94,7 +94,7 @@ pub struct StressRow {
 
 /// For each variant, the dam break at the coarsest spacing with CFL 0.1, 0.2, 0.4, 0.8:
 /// which complete (with a measurable front).
-pub fn cfl_sweep(cases: &[BenchCase], dir: &Path) -> Vec<StressRow> {
+pub fn cfl_sweep(cases: &[BenchCase], variants: &[Variant], dir: &Path) -> Vec<StressRow> {
     let mut rows = Vec::new();
     let Some(dam) = cases
         .iter()
@@ -103,7 +103,7 @@ pub fn cfl_sweep(cases: &[BenchCase], dir: &Path) -> Vec<StressRow> {
         return rows;
     };
     let spacing = dam.spacings[0];
-    for variant in variants() {
+    for variant in variants {
         for cfl in [0.1, 0.2, 0.4, 0.8] {
             let mut case = BenchCase {
                 name: dam.name,
@@ -114,7 +114,7 @@ pub fn cfl_sweep(cases: &[BenchCase], dir: &Path) -> Vec<StressRow> {
             };
             case.overrides.push(format!("time.cfl={cfl}"));
             case.overrides.push("time.max_dt=0.01".into());
-            let r = run_one(&case, &variant, spacing, &dir.join(format!("cfl_{cfl}")));
+            let r = run_one(&case, variant, spacing, &dir.join(format!("cfl_{cfl}")));
             eprintln!(
                 "stress dam_break {:<14} cfl {cfl:<4} {} error {:.3e} {}",
                 variant.name, r.status, r.error, r.note

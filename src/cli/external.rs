@@ -31,6 +31,7 @@ pub fn bench(args: BenchArgs) -> i32 {
         features: args.features,
         no_study: args.no_study,
         cases: args.cases,
+        variants: args.variants,
         scaling_options: mpsfsi::bench::scaling::ScalingOptions {
             max_particles: args.max_particles,
             steps: args.scaling_steps,

@@ -86,6 +86,10 @@ pub struct BenchArgs {
     /// wedge_30deg, standing_wave. Default: all.
     #[arg(long = "case", value_name = "NAME")]
     pub cases: Vec<String>,
+    /// Only these scheme variants of the study and the CFL sweep (repeatable): classic,
+    /// default, chl, least_squares. Default: all.
+    #[arg(long = "variant", value_name = "NAME")]
+    pub variants: Vec<String>,
     /// Largest size of `--scaling` (640000 and 1300000 are the large sizes).
     #[arg(long, default_value_t = 160_000)]
     pub max_particles: usize,

@@ -118,6 +118,18 @@ pub fn wedge_fit(overrides: &[String]) -> WedgeFit {
         fit.coupling_seconds
     );
     let (z_peak, cp_peak) = peak(&fit.profile);
+    // the force the averaged profile carries: F_y = 2 ∫ p dx over one face's horizontal
+    // projection, x/(Vt) = (z/(Vt) + 1) / tan 30°, so C_F = ∫ Cp d(x/(Vt))
+    let dx = 0.025 / 0.577_350_269;
+    let c_profile: f64 = fit.profile.iter().map(|(_, cp)| cp * dx).sum();
+    println!(
+        "  C_F from the averaged pressure profile {c_profile:.3}; profile (z/(Vt), Cp): {}",
+        fit.profile
+            .iter()
+            .map(|(z, cp)| format!("{z:.3}:{cp:.2}"))
+            .collect::<Vec<_>>()
+            .join(" ")
+    );
     println!(
         "  peak Cp {cp_peak:.3} at z/(Vt) = {z_peak:.3} (similarity 6.927 at 0.424); profile at the table's points: {}",
         CP_TABLE

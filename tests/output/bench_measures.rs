@@ -207,13 +207,35 @@ fn the_interpretation_is_computed_from_the_rows() {
     );
 }
 
+/// A study limited to an unknown variant or case is refused before any run, naming
+/// the known ones.
+#[test]
+fn bench_refuses_an_unknown_variant_or_case() {
+    let dir = crate::scratch_dir("bench-unknown");
+    let mut options = mpsfsi::bench::BenchOptions::study(true, dir.clone());
+    options.variants = vec!["clasic".into()];
+    let e = mpsfsi::bench::run(options).unwrap_err().to_string();
+    assert!(
+        e.contains("unknown variant \"clasic\"") && e.contains("\"classic\""),
+        "{e}"
+    );
+    let mut options = mpsfsi::bench::BenchOptions::study(true, dir.clone());
+    options.cases = vec!["wedge".into()];
+    let e = mpsfsi::bench::run(options).unwrap_err().to_string();
+    assert!(
+        e.contains("unknown case \"wedge\"") && e.contains("\"wedge_30deg\""),
+        "{e}"
+    );
+    assert!(!dir.join("results.csv").exists(), "a run started");
+}
+
 /// The CFL sweep of `--stress` on the coarse dam break (about a minute).
 #[test]
 #[ignore]
 fn cfl_sweep_reports_every_variant() {
     let cases = mpsfsi::bench::bench_cases(true).unwrap();
     let dir = crate::scratch_dir("cfl-sweep");
-    let rows = mpsfsi::bench::report::cfl_sweep(&cases, &dir);
+    let rows = mpsfsi::bench::report::cfl_sweep(&cases, &mpsfsi::bench::variants(), &dir);
     for v in mpsfsi::bench::variants() {
         let mine: Vec<_> = rows.iter().filter(|r| r.variant == v.name).collect();
         assert_eq!(mine.len(), 4, "{}", v.name);
