@@ -285,7 +285,16 @@ pub fn wedge_ensemble(l0: f64, members: usize, extra: &[String]) -> (f64, f64, V
 }
 
 /// Spacings that divide the tank (2 m x 1 m of water) into whole rows and columns, each
-/// an ensemble of `WEDGE_ENSEMBLE` (4) lattice offsets. `WEDGE_SPACINGS=0.01,0.008` and
+/// an ensemble of `WEDGE_ENSEMBLE` (4) lattice offsets.
+///
+/// Where the excess comes from (session 6, the window-averaged pressure profile printed
+/// by `wedge_fit`): the lower face reads Cp 5.0-5.2 against the table's 4.54-4.62 at 5 mm
+/// (+6-11 % at 10 mm), while the peak is 12 % low; the profile integrates to the measured
+/// C_F (15.27 against 15.37 from the loads). Unchanged with CFL 0.05, without clipping
+/// negative pressures, without collisions; ghosts and the surface offset are inert with
+/// g = 0. `scheme.radius = 2.5` brings the lower face within 1-3 % of the table at 5 mm
+/// (C_F 13.73, 13.05 and 13.25 at 5, 6.25 and 8 mm, one offset each) but breaks the run at
+/// 10 mm (C_F 10.4); 3.1 gives 14.66 / 14.97 at 10 / 5 mm. `WEDGE_SPACINGS=0.01,0.008` and
 /// `WEDGE_SET="scheme.x=y ..."` rerun it for diagnosis.
 #[test]
 #[ignore = "fails: ensembles of 4 offsets read 14.71 ± 0.39 / 14.99 ± 0.43 / 15.53 ± 0.12 at 10 / 8 / 5 mm (+4.8 / +6.8 / +10.6 %): the error grows with refinement; about 8 minutes on two cores"]

@@ -212,20 +212,27 @@ fn the_interpretation_is_computed_from_the_rows() {
 #[test]
 fn bench_refuses_an_unknown_variant_or_case() {
     let dir = crate::scratch_dir("bench-unknown");
-    let mut options = mpsfsi::bench::BenchOptions::study(true, dir.clone());
-    options.variants = vec!["clasic".into()];
-    let e = mpsfsi::bench::run(options).unwrap_err().to_string();
-    assert!(
-        e.contains("unknown variant \"clasic\"") && e.contains("\"classic\""),
-        "{e}"
-    );
-    let mut options = mpsfsi::bench::BenchOptions::study(true, dir.clone());
-    options.cases = vec!["wedge".into()];
-    let e = mpsfsi::bench::run(options).unwrap_err().to_string();
-    assert!(
-        e.contains("unknown case \"wedge\"") && e.contains("\"wedge_30deg\""),
-        "{e}"
-    );
+    let refused = [
+        (
+            vec!["clasic".to_string()],
+            vec![],
+            "unknown variant \"clasic\"",
+            "\"classic\"",
+        ),
+        (
+            vec![],
+            vec!["wedge".to_string()],
+            "unknown case \"wedge\"",
+            "\"wedge_30deg\"",
+        ),
+    ];
+    for (variants, cases, reason, known) in refused {
+        let mut options = mpsfsi::bench::BenchOptions::study(true, dir.clone());
+        options.variants = variants;
+        options.cases = cases;
+        let e = mpsfsi::bench::run(options).unwrap_err().to_string();
+        assert!(e.contains(reason) && e.contains(known), "{e}");
+    }
     assert!(!dir.join("results.csv").exists(), "a run started");
 }
 
