@@ -101,3 +101,26 @@ fn surge_front_follows_martin_and_moyce() {
         "front speed {speed:.3} vs {speed_ref:.3}"
     );
 }
+
+/// Stress (issue 6): the dam break to 5 s at a/40, through the impact on the far wall, the
+/// overturning wave and its plunge back into the flow, completes (a few runaway spray
+/// particles removed within the allowance are allowed) with finite velocities throughout.
+#[test]
+#[ignore = "fails at 0.84 s (step 3546): where the overturning wave plunges into the flow, interior splash particles 14 spacings from any wall take 0.13 MPa, then 1-3 MPa within two steps, and leave at 80 m/s; 4 are removed as runaways and the fifth fails the run; about 30 s to the failure"]
+fn dam_break_runs_to_five_seconds() {
+    let case = shipped_case("dam_break.json", &["time.end=5.0"]);
+    let mut sim = Simulation::new(&case);
+    while sim.time < case.time.end {
+        let dt = sim.next_dt();
+        sim.step(dt)
+            .unwrap_or_else(|e| panic!("dam break to 5 s failed: {e}"));
+        assert!(
+            sim.particles
+                .velocity
+                .iter()
+                .all(|u| u.x.is_finite() && u.y.is_finite()),
+            "non-finite velocity at t = {}",
+            sim.time
+        );
+    }
+}
