@@ -152,7 +152,12 @@ pub fn write_report(
         rayon::current_num_threads()
     );
     let _ = writeln!(md, "Variants:\n");
-    for v in variants() {
+    // those the study ran (`--variant` may have picked some)
+    let ran: Vec<_> = variants()
+        .into_iter()
+        .filter(|v| results.iter().any(|r| r.variant == v.name))
+        .collect();
+    for v in &ran {
         let _ = writeln!(md, "- `{}`: {}", v.name, v.description);
     }
     md.push('\n');
@@ -208,7 +213,7 @@ pub fn write_report(
         md.push_str(&interpretation(&rows));
         md.push('\n');
         // the plot
-        let series: Vec<Series> = variants()
+        let series: Vec<Series> = ran
             .iter()
             .map(|v| Series {
                 name: v.name.to_string(),

@@ -326,11 +326,9 @@ impl Scheme {
             source: SourceKind::Pnd,
             compressibility: 0.45e-9,
             // the 1996 scheme as published: the baseline of the benchmark. Its free
-            // surface is the PND test alone; with our neighbour-distribution check as
-            // well, still water ran away within 0.02-0.09 s at every spacing (a particle
-            // with a low PND but a symmetric neighbourhood stays an unknown, and the PND
-            // source gives it a large negative pressure). Nor had it hydrostatic ghosts or
-            // the surface offset.
+            // surface is the PND test alone: with our neighbour-distribution check as
+            // well, still water ran away within 0.02-0.09 s at every spacing. Nor had it
+            // hydrostatic ghosts or the surface offset.
             surface_asymmetry: 0.0,
             hydrostatic_ghosts: false,
             surface_offset: false,
