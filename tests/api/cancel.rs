@@ -17,9 +17,16 @@ async fn cancelling_a_running_job_stops_it_and_keeps_its_files() {
         .send()
         .await
         .unwrap();
-    assert_eq!(r.status().as_u16(), 202);
+    // 202 while the run is still stopping; 200 when it stopped (between the request and
+    // the handler's re-read: a step of this tank is well under a millisecond). Seen once
+    // in a full suite run.
+    let code = r.status().as_u16();
     let body: Value = r.json().await.unwrap();
-    assert_conforms("DELETE", "/v1/jobs/{id}", 202, &body);
+    assert!(
+        code == 202 || (code == 200 && body["status"] == "cancelled"),
+        "{code}: {body:#}"
+    );
+    assert_conforms("DELETE", "/v1/jobs/{id}", code, &body);
 
     let job = app.wait_finished(&id).await;
     assert_eq!(job["status"], "cancelled", "{job:#}");
