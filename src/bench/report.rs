@@ -258,7 +258,11 @@ pub fn write_report(
             );
         }
         md.push('\n');
-        for v in variants() {
+        // the variants the sweep ran (`--variant` may have picked some)
+        for v in variants()
+            .iter()
+            .filter(|v| stress.iter().any(|s| s.variant == v.name))
+        {
             let stable = stress
                 .iter()
                 .filter(|s| s.variant == v.name && s.completed)
