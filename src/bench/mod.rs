@@ -224,12 +224,13 @@ pub fn dam_break_case(a: Real) -> Value {
         },
         "fluid": { "density": 1000.0, "kinematic_viscosity": 1.0e-6, "gravity": [0.0, -9.81] },
         "particle_spacing": a / 20.0,
-        "domain": { "min": [-0.2 * a, -0.2 * a], "max": [4.2 * a, 3.5 * a] },
+        "domain": { "min": [-0.2 * a, -0.2 * a], "max": [4.2 * a, 8.6 * a] },
         "fluid_blocks": [ { "polygon": [[0.0, 0.0], [a, 0.0], [a, 2.0 * a], [0.0, 2.0 * a]] } ],
-        "walls": [ { "name": "tank", "polyline": [[0.0, 3.0 * a], [0.0, 0.0], [4.0 * a, 0.0], [4.0 * a, 3.0 * a]] } ],
-        "time": { "end": t3, "cfl": 0.2, "max_dt": 1.0e-3 },
+        // walls tall enough for the run-up on the far wall (as the shipped case)
+        "walls": [ { "name": "tank", "polyline": [[0.0, 8.2 * a], [0.0, 0.0], [4.0 * a, 0.0], [4.0 * a, 8.2 * a]] } ],
+        "time": { "end": t3, "cfl": 0.15, "max_dt": 1.0e-3 },
         "output": { "load_interval": 0.005, "snapshot_interval": 0.05 / (2.0 * 9.81 / a).sqrt() },
-        "scheme": {}
+        "scheme": { "laplacian_fill_floor": 0.3 }
     })
 }
 

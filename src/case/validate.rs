@@ -517,6 +517,15 @@ fn check_scalars(case: &Case) -> Check {
         s.stabilization_distance,
         "a ratio of particle_spacing",
     )?;
+    if !(s.laplacian_fill_floor > 0.0 && s.laplacian_fill_floor <= 1.0) {
+        return reject(
+            "scheme.laplacian_fill_floor",
+            format!(
+                "must lie in (0, 1] (got {}): a fraction of n0, 1 disables the renormalisation",
+                s.laplacian_fill_floor
+            ),
+        );
+    }
     non_negative(
         "scheme.mixed_relaxation",
         s.mixed_relaxation,

@@ -675,6 +675,9 @@ fn assemble_pressure_equation<K: Kernel>(
     let lattice = Normalisation::Reference(LatticeConstants::compute::<K>(p.l0, p.re_lap, 2));
     let neumann = &sim.scratch.neumann;
     let nu = particle_of.len();
+    // the fill n*/n0 of each neighbourhood, floored (see `Scheme::laplacian_fill_floor`)
+    let floor = sim.scheme.laplacian_fill_floor;
+    let fill = |i: usize| -> Real { (n_star[i] / n0).clamp(floor, 1.0) };
     // row `row` appended to cols/vals; returns the right-hand side
     let row_entries = |row: usize, cols: &mut Vec<u32>, vals: &mut Vec<Real>| -> Real {
         let i = particle_of[row] as usize;
@@ -699,9 +702,12 @@ fn assemble_pressure_equation<K: Kernel>(
         // lattice, the first-order error of the Laplacian where the free surface or
         // disorder truncates the neighbourhood
         let mut first_moment = Vec2::zeros();
+        // a pair's weight over the mean fill of its two particles: symmetric, and 1 in
+        // a full neighbourhood
+        let fi = fill(i);
         for &j in nb.of(i) {
             let r = x[j as usize] - x[i];
-            let l = c_lap * weights.laplacian(r.norm());
+            let l = c_lap * weights.laplacian(r.norm()) * 2.0 / (fi + fill(j as usize));
             if l == 0.0 {
                 continue;
             }
@@ -718,9 +724,10 @@ fn assemble_pressure_equation<K: Kernel>(
         cols.push(row as u32);
         vals.push(diag);
         let base = contacts.offsets[i] as usize;
+        let wall_scale = 1.0 / fi;
         for (k, c) in contacts.of(i).iter().enumerate() {
-            b += c_lap * neumann[base + k].dot(&c.terms.laplacian_moment);
-            first_moment += c.terms.laplacian_moment * c_lap;
+            b += c_lap * wall_scale * neumann[base + k].dot(&c.terms.laplacian_moment);
+            first_moment += c.terms.laplacian_moment * (c_lap * wall_scale);
         }
         // Hydrostatic consistency: the missing part of the neighbourhood (-Σ L r) is
         // filled with ghosts carrying the hydrostatic pressure p_i + rho g·r, so a

@@ -161,6 +161,13 @@ fn scheme_ranges() {
         "scheme.velocity_filter",
         "[0, 0.5]",
     );
+    for bad in [0.0, 1.2] {
+        assert_error(
+            &rejected_json(|v| v["scheme"]["laplacian_fill_floor"] = json!(bad)),
+            "scheme.laplacian_fill_floor",
+            "(0, 1]",
+        );
+    }
     assert_error(
         &rejected_json(|v| v["scheme"]["surface_threshold"] = json!(1.5)),
         "scheme.surface_threshold",
