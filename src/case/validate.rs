@@ -436,6 +436,15 @@ fn non_negative(path: &str, v: f64, what: &str) -> Check {
     }
 }
 
+/// A share of n0 in (0, 1].
+fn share_of_n0(path: &str, v: f64, what: &str) -> Check {
+    if v > 0.0 && v <= 1.0 {
+        Ok(())
+    } else {
+        reject(path, format!("must lie in (0, 1] (got {v}): {what}"))
+    }
+}
+
 fn check_scalars(case: &Case) -> Check {
     positive(
         "fluid.density",
@@ -493,15 +502,11 @@ fn check_scalars(case: &Case) -> Check {
             "must be positive (got 0): 1 rebuilds the AMG hierarchy every step",
         );
     }
-    if !(s.surface_threshold > 0.0 && s.surface_threshold <= 1.0) {
-        return reject(
-            "scheme.surface_threshold",
-            format!(
-                "must lie in (0, 1] (got {}): a fraction of n0, about 0.97 is usual",
-                s.surface_threshold
-            ),
-        );
-    }
+    share_of_n0(
+        "scheme.surface_threshold",
+        s.surface_threshold,
+        "a fraction of n0, about 0.97 is usual",
+    )?;
     non_negative(
         "scheme.surface_asymmetry",
         s.surface_asymmetry,
@@ -517,15 +522,11 @@ fn check_scalars(case: &Case) -> Check {
         s.stabilization_distance,
         "a ratio of particle_spacing",
     )?;
-    if !(s.laplacian_fill_floor > 0.0 && s.laplacian_fill_floor <= 1.0) {
-        return reject(
-            "scheme.laplacian_fill_floor",
-            format!(
-                "must lie in (0, 1] (got {}): a fraction of n0, 1 disables the renormalisation",
-                s.laplacian_fill_floor
-            ),
-        );
-    }
+    share_of_n0(
+        "scheme.laplacian_fill_floor",
+        s.laplacian_fill_floor,
+        "a fraction of n0, 1 disables the renormalisation",
+    )?;
     non_negative(
         "scheme.mixed_relaxation",
         s.mixed_relaxation,
