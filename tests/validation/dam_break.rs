@@ -1,7 +1,9 @@
 //! Dam break (Koshizuka & Oka 1996 geometry, l0 = a/40) against Martin & Moyce (1952).
 //!
 //! Measured (closing note of the engine issue): the front runs 13-21% ahead of the
-//! experiment over 1 <= T <= 3 and the gap does not shrink from a/40 to a/60; it opens
+//! experiment over 1 <= T <= 3 (session 7, the case at CFL 0.15 with the fill floor:
+//! 9-21%, front speed +9.7%, +8.6% at CFL 0.2) and the gap does not shrink from a/40
+//! to a/60; it opens
 //! before T = 1.2 (experiment: Z = 1.22 at T = 0.84, simulation 1.41), which
 //! references.md attributes to the gate release. After that the simulated front moves
 //! at the experimental speed. This test therefore asserts (a) the front speed
