@@ -675,9 +675,16 @@ fn assemble_pressure_equation<K: Kernel>(
     let lattice = Normalisation::Reference(LatticeConstants::compute::<K>(p.l0, p.re_lap, 2));
     let neumann = &sim.scratch.neumann;
     let nu = particle_of.len();
-    // the fill n*/n0 of each neighbourhood, floored (see `Scheme::laplacian_fill_floor`)
+    // the fill n*/n0 of each neighbourhood, floored (`Scheme::laplacian_fill_floor`);
+    // none when disabled, so the default pays nothing per pair
     let floor = sim.scheme.laplacian_fill_floor;
-    let fill = |i: usize| -> Real { (n_star[i] / n0).clamp(floor, 1.0) };
+    let fills: Option<Vec<Real>> = (floor < 1.0).then(|| {
+        n_star
+            .par_iter()
+            .map(|n| (n / n0).clamp(floor, 1.0))
+            .collect()
+    });
+    let fills = fills.as_deref();
     // row `row` appended to cols/vals; returns the right-hand side
     let row_entries = |row: usize, cols: &mut Vec<u32>, vals: &mut Vec<Real>| -> Real {
         let i = particle_of[row] as usize;
@@ -704,10 +711,10 @@ fn assemble_pressure_equation<K: Kernel>(
         let mut first_moment = Vec2::zeros();
         // a pair's weight over the mean fill of its two particles: symmetric, and 1 in
         // a full neighbourhood
-        let fi = fill(i);
+        let pair_scale = |j: usize| fills.map_or(1.0, |f| 2.0 / (f[i] + f[j]));
         for &j in nb.of(i) {
             let r = x[j as usize] - x[i];
-            let l = c_lap * weights.laplacian(r.norm()) * 2.0 / (fi + fill(j as usize));
+            let l = c_lap * weights.laplacian(r.norm()) * pair_scale(j as usize);
             if l == 0.0 {
                 continue;
             }
@@ -724,7 +731,7 @@ fn assemble_pressure_equation<K: Kernel>(
         cols.push(row as u32);
         vals.push(diag);
         let base = contacts.offsets[i] as usize;
-        let wall_scale = 1.0 / fi;
+        let wall_scale = fills.map_or(1.0, |f| 1.0 / f[i]);
         for (k, c) in contacts.of(i).iter().enumerate() {
             b += c_lap * wall_scale * neumann[base + k].dot(&c.terms.laplacian_moment);
             first_moment += c.terms.laplacian_moment * (c_lap * wall_scale);

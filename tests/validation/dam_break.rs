@@ -2,9 +2,8 @@
 //!
 //! Measured (closing note of the engine issue): the front runs 13-21% ahead of the
 //! experiment over 1 <= T <= 3 (session 7, the case at CFL 0.15 with the fill floor:
-//! 9-21%, front speed +9.7%, +8.6% at CFL 0.2) and the gap does not shrink from a/40
-//! to a/60; it opens
-//! before T = 1.2 (experiment: Z = 1.22 at T = 0.84, simulation 1.41), which
+//! 9-21%, front speed +9.7%; +8.6% at CFL 0.2) and the gap does not shrink from a/40
+//! to a/60; it opens before T = 1.2 (experiment: Z = 1.22 at T = 0.84, simulation 1.41), which
 //! references.md attributes to the gate release. After that the simulated front moves
 //! at the experimental speed. This test therefore asserts (a) the front speed
 //! dZ/dT over 1.19 <= T <= 2.83 within 10% of Martin & Moyce's, and (b) the position
@@ -109,7 +108,7 @@ fn surge_front_follows_martin_and_moyce() {
 /// particles removed within the allowance are allowed) with finite velocities throughout.
 /// The shipped case is set up for it: walls 1.2 m high, so the run-up on the far wall
 /// (a sheet to 1.03 m at 0.7 s) stays in the tank (with walls and domain at 0.45/0.5 m,
-/// 6 % of the water left through the top and the rest ran); CFL 0.15 and
+/// 5.3 % of the water left through the top by 0.56 s and the rest ran); CFL 0.15 and
 /// `scheme.laplacian_fill_floor` 0.3. Without the floor the run fails at 0.88 s (CFL
 /// 0.1); with it, it completes at CFL 0.08, 0.1 and 0.15 and fails at 0.2 (1.14 s).
 #[test]
