@@ -235,8 +235,9 @@ pub struct Scheme {
     /// actual neighbours: the correction overshoots. Measured on the dam break at a/40
     /// in a tank tall enough to keep the run-up: a sheet falling at 2.7 m/s onto the
     /// pool by the far wall reversed to +8.9 m/s in one step (161 kPa) and the run
-    /// failed at 0.88 s; with a floor of 0.3 it runs to 5 s at CFL 0.08, 0.1 and 0.15
-    /// (0.2 fails at 1.14 s). `cases/dam_break.json` sets 0.3.
+    /// failed at 0.88 s; with a floor of 0.3 it runs to 5 s at CFL 0.1 and 0.12 (0.15
+    /// is on the edge: it completed once and failed at 2.96 s after a round-off change;
+    /// 0.2 fails at 1.14 s). `cases/dam_break.json` sets 0.3.
     /// Not the default: it also lowers the pressure of the thin layers under a jet root.
     /// The wedge at 1 cm reads C_F 11.97 (off: 15.61) and peak Cp 4.82 (off: 5.76); at
     /// 5 mm C_F 15.36 (off: 15.37) and peak Cp 6.52 (off: 6.13). The standing wave
