@@ -38,6 +38,10 @@ use std::time::Instant;
 
 /// Amplitude of the lattice perturbation (ratio of l0).
 pub const PERTURBATION: Real = 0.2;
+/// CFL of the dam break to 5 s: the case's 0.15 is on the edge of stability over that
+/// long (it completed, then failed at 2.96 s after a round-off change); 0.1 and 0.12
+/// complete. The ignored test of the same run uses it too.
+pub const DAM_BREAK_LONG_CFL: Real = 0.1;
 /// Seed of the lattice perturbation.
 pub const PERTURBATION_SEED: u64 = 20_240_601;
 
@@ -268,13 +272,13 @@ pub fn stress_runs(quick: bool) -> io::Result<Vec<StressRun>> {
         &format!("particle_spacing={}", a / per_width as Real),
     )?;
     set(&mut dam, &format!("time.end={dam_end}"))?;
-    set(&mut dam, "time.cfl=0.1")?;
+    set(&mut dam, &format!("time.cfl={DAM_BREAK_LONG_CFL}"))?;
     set(&mut dam, "output.load_interval=0.01")?;
     set(&mut dam, "output.snapshot_interval=null")?;
     runs.push(StressRun {
         name: "dam_break_long".into(),
         description: format!(
-            "Koshizuka & Oka dam break to {dam_end} s at l0 = a/{per_width}, CFL 0.1 (far-wall impact, overturning wave)"
+            "Koshizuka & Oka dam break to {dam_end} s at l0 = a/{per_width}, CFL {DAM_BREAK_LONG_CFL} (far-wall impact, overturning wave)"
         ),
         case: dam,
         kind: StressKind::Plain,

@@ -15,6 +15,7 @@
 //! bulk of the collapse is right; the disagreement is at the tip of the surge.
 
 use super::shipped_case;
+use mpsfsi::bench::stress::DAM_BREAK_LONG_CFL;
 use mpsfsi::engine::Simulation;
 
 /// (t sqrt(g/a), H/(2a)) of the residual column, from references.md.
@@ -112,11 +113,13 @@ fn surge_front_follows_martin_and_moyce() {
 /// `scheme.laplacian_fill_floor` 0.3. Without the floor the run fails at 0.88 s (CFL
 /// 0.1). With it, it completes at CFL 0.1 and 0.12 (0 runaways) and fails at 0.2 (1.14
 /// s); the case's 0.15 is on the edge: it completed, and then failed at 2.96 s after a
-/// round-off change (one product reordered). So this run takes CFL 0.1.
+/// round-off change (one product reordered). So this run takes the stress scene's
+/// `DAM_BREAK_LONG_CFL` (0.1).
 #[test]
 #[ignore = "long: about 4 minutes on two cores (the full `bench --stress` runs it too)"]
 fn dam_break_runs_to_five_seconds() {
-    let case = shipped_case("dam_break.json", &["time.end=5.0", "time.cfl=0.1"]);
+    let cfl = format!("time.cfl={DAM_BREAK_LONG_CFL}");
+    let case = shipped_case("dam_break.json", &["time.end=5.0", &cfl]);
     let mut sim = Simulation::new(&case);
     while sim.time < case.time.end {
         let dt = sim.next_dt();
