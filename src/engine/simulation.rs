@@ -276,4 +276,9 @@ impl Simulation {
     pub fn wall_names(&self) -> Vec<String> {
         self.walls.iter().map(|w| w.name.clone()).collect()
     }
+
+    /// Each particle's wall contacts of the last step (diagnostics).
+    pub fn wall_contacts(&self) -> &crate::engine::walls::WallContacts {
+        &self.contacts
+    }
 }

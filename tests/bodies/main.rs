@@ -6,5 +6,6 @@ mod apex;
 mod common;
 mod coupling;
 mod hydrostatics;
+mod plate_impulse;
 mod probe;
 mod wedge;

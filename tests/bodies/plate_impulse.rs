@@ -1,0 +1,127 @@
+//! The wall model's kinematic condition on a moving body, in isolation: a flat plate of
+//! half-breadth c lying on still water is started impulsively downwards at V. Potential
+//! flow gives the impulse on the plate, its added mass times V, with Wagner's added mass
+//! of a plate on a free surface rho pi c² / 2 (per unit length), and the water under the
+//! plate leaves with the plate's velocity. This is the quantity a slamming load is made
+//! of (Wagner's force is d(m_a V)/dt), measured without the jet and the moving wetted
+//! breadth of a wedge.
+//!
+//! The shipped wedge tank (2 m x 1 m of water) with c = 0.1 m: doubling the tank moved
+//! the impulse by 0.4 % at 1 cm. Steps of 5 µs (V dt = l0 / 2000 at 1 cm) keep the start
+//! impulsive; the impulse is complete within four steps.
+
+use crate::common::*;
+use mpsfsi::coupling::CouplingOptions;
+use std::f64::consts::PI;
+
+const C: f64 = 0.1;
+const V: f64 = 1.0;
+const STEPS: usize = 6;
+const DT: f64 = 5e-6;
+
+struct Start {
+    /// Impulse on the plate over the first steps / (rho pi c² V / 2).
+    impulse: f64,
+    /// Mean downward velocity of the row under the middle half of the plate / V.
+    first_row: f64,
+}
+
+fn impulsive_start(l0: f64, kinematics: &str) -> Start {
+    let case = shipped(
+        "wedge_30deg_constant_velocity.json",
+        &[
+            format!("particle_spacing={l0}"),
+            format!(
+                "bodies.0.polygon=[[{m}, 0.0], [{C}, 0.0], [{C}, 0.02], [{m}, 0.02]]",
+                m = -C
+            ),
+            format!("bodies.0.motion.velocity=[0.0, {}]", -V),
+            format!("time.max_dt={DT}"),
+            format!("scheme.wall_kinematics=\"{kinematics}\""),
+        ],
+    );
+    let mut first_row = 0.0;
+    let trace = run(
+        &case,
+        CouplingOptions::default(),
+        Some(STEPS as f64 * DT),
+        |sim| {
+            let p = &sim.particles;
+            let row: Vec<f64> = (0..p.len())
+                .filter(|&i| p.position[i].x.abs() < 0.5 * C && p.position[i].y > -l0)
+                .map(|i| -p.velocity[i].y)
+                .collect();
+            first_row = row.iter().sum::<f64>() / row.len() as f64 / V;
+        },
+    );
+    assert!(trace.error.is_none(), "{:?}", trace.error);
+    assert_eq!(trace.steps.len(), STEPS, "steps of {DT} s");
+    let k = trace.wall("wedge");
+    let impulse: f64 = trace.steps.iter().map(|s| s.force[k].y * s.dt).sum();
+    let start = Start {
+        impulse: impulse / (RHO * PI * C * C / 2.0 * V),
+        first_row,
+    };
+    println!(
+        "plate c = {C} m, l0 = {l0} m, {kinematics} kinematics: impulse / (rho pi c² V / 2) = {:.4}, first row at {:.4} V",
+        start.impulse, start.first_row
+    );
+    start
+}
+
+/// `wall_kinematics = "neumann"`: the approach velocity enters the Neumann gradient of
+/// the virtual pressures, the projection's own boundary condition. Measured at 10 / 5 /
+/// 2.5 mm: 1.038 / 1.021 / 1.013 (first order in l0), the row under the plate at
+/// 1.0003 / 1.0010 / 1.0005 V.
+#[test]
+fn impulsively_started_plate_carries_wagner_added_mass() {
+    let starts: Vec<Start> = [0.01, 0.005]
+        .iter()
+        .map(|&l0| impulsive_start(l0, "neumann"))
+        .collect();
+    for (s, bound) in starts.iter().zip([0.05, 0.03]) {
+        assert!(
+            (s.impulse - 1.0).abs() < bound,
+            "added mass {:.4} of rho pi c² / 2 ({bound} allowed)",
+            s.impulse
+        );
+        assert!(
+            (s.first_row - 1.0).abs() < 0.01,
+            "the water under the plate leaves at {:.4} V (1 % allowed)",
+            s.first_row
+        );
+    }
+    assert!(
+        (starts[1].impulse - 1.0).abs() < (starts[0].impulse - 1.0).abs(),
+        "the added mass does not converge: {:.4} at 1 cm, {:.4} at 5 mm",
+        starts[0].impulse,
+        starts[1].impulse
+    );
+}
+
+/// The default `wall_kinematics = "source"` (the wall's virtual points move with it in
+/// the HS divergence) misses the condition on an impulsive start: the row under the
+/// plate leaves at 1.24 / 1.26 / 1.27 V at 10 / 5 / 2.5 mm, separating from the plate,
+/// and the added mass reads 1.078 / 1.099 / 1.116, the error growing with refinement.
+/// Why: the HS divergence gives a pair's approach in full to both particles' rows, and
+/// a virtual wall point has no row. Counting the wall's share twice in the source
+/// removes it (0.995 / 0.999 / 1.002, first row at 1.03-1.04 V), but raised the wedge's
+/// C_F (ensembles 14.6 / 15.5 at 10 / 8 mm, two runs at 5 mm 15.8 and 16.7), so it was
+/// not kept. A flat-bottomed body dropped on water is where this matters.
+#[test]
+#[ignore = "fails: the default source kinematics carries 1.078 / 1.099 of the added mass at 10 / 5 mm and the row under the plate leaves at 1.24 / 1.26 V (closing note of issue 3, session 8)"]
+fn impulsively_started_plate_with_default_kinematics() {
+    for l0 in [0.01, 0.005] {
+        let s = impulsive_start(l0, "source");
+        assert!(
+            (s.impulse - 1.0).abs() < 0.03,
+            "l0 = {l0}: added mass {:.4} of rho pi c² / 2 (3 % allowed)",
+            s.impulse
+        );
+        assert!(
+            (s.first_row - 1.0).abs() < 0.05,
+            "l0 = {l0}: the water under the plate leaves at {:.4} V (5 % allowed)",
+            s.first_row
+        );
+    }
+}
