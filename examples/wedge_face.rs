@@ -2,7 +2,9 @@
 //! Bands of z/(Vt) along the faces; per band, for particles within 0.8 l0 of the face:
 //! mean distance d/l0, number density n/n0, Cp, relative normal velocity (u - u_w)·n / V
 //! (positive: leaving the face) and the share flagged free surface.
-//! `cargo run --release --example wedge_face -- [PATH=VALUE]...`
+//! Also prints the mean F / (rho V³ t) over the window.
+//! `TA=0.5 TB=0.6 cargo run --release --example wedge_face -- [PATH=VALUE]...`
+//! (the window in units of t_chine; those are the defaults)
 use mpsfsi::case::load_case_file;
 use mpsfsi::coupling::{Coupling, CouplingOptions};
 use mpsfsi::engine::Simulation;
@@ -25,12 +27,16 @@ fn main() {
     let mut acc = vec![[0.0f64; 6]; nb];
     let mut cf = (0.0, 0.0);
     let mut acc2 = vec![[0.0f64; 2]; nb]; // second row (0.8..1.6 l0): n/n0, Cp
-    while sim.time < 0.6 * t_chine {
+    let window = |name: &str, default: f64| -> f64 {
+        std::env::var(name).map_or(default, |v| v.parse().expect("TA and TB are numbers"))
+    };
+    let (ta, tb) = (window("TA", 0.5), window("TB", 0.6));
+    while sim.time < tb * t_chine {
         let dt = sim.next_dt();
         coupling.before_step(&mut sim, dt);
         sim.step(dt).unwrap();
         coupling.after_step(&mut sim, dt);
-        if sim.time < 0.5 * t_chine {
+        if sim.time < ta * t_chine {
             continue;
         }
         cf.0 += sim.loads[k as usize].force.y / (1000.0 * v.powi(3) * (sim.time - 0.5 * dt));

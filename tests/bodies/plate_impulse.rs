@@ -26,6 +26,23 @@ struct Start {
     first_row: f64,
 }
 
+impl Start {
+    /// Both against potential flow: the added mass within `impulse` (a fraction) and the
+    /// water under the plate at the plate's velocity within `row`.
+    fn check(&self, l0: f64, impulse: f64, row: f64) {
+        assert!(
+            (self.impulse - 1.0).abs() < impulse,
+            "l0 = {l0}: added mass {:.4} of rho pi c² / 2 ({impulse} allowed)",
+            self.impulse
+        );
+        assert!(
+            (self.first_row - 1.0).abs() < row,
+            "l0 = {l0}: the water under the plate leaves at {:.4} V ({row} allowed)",
+            self.first_row
+        );
+    }
+}
+
 fn impulsive_start(l0: f64, kinematics: &str) -> Start {
     let case = shipped(
         "wedge_30deg_constant_velocity.json",
@@ -75,21 +92,13 @@ fn impulsive_start(l0: f64, kinematics: &str) -> Start {
 /// 1.0003 / 1.0010 / 1.0005 V.
 #[test]
 fn impulsively_started_plate_carries_wagner_added_mass() {
-    let starts: Vec<Start> = [0.01, 0.005]
+    let spacings = [0.01, 0.005];
+    let starts: Vec<Start> = spacings
         .iter()
         .map(|&l0| impulsive_start(l0, "neumann"))
         .collect();
-    for (s, bound) in starts.iter().zip([0.05, 0.03]) {
-        assert!(
-            (s.impulse - 1.0).abs() < bound,
-            "added mass {:.4} of rho pi c² / 2 ({bound} allowed)",
-            s.impulse
-        );
-        assert!(
-            (s.first_row - 1.0).abs() < 0.01,
-            "the water under the plate leaves at {:.4} V (1 % allowed)",
-            s.first_row
-        );
+    for ((s, l0), bound) in starts.iter().zip(spacings).zip([0.05, 0.03]) {
+        s.check(l0, bound, 0.01);
     }
     assert!(
         (starts[1].impulse - 1.0).abs() < (starts[0].impulse - 1.0).abs(),
@@ -102,7 +111,8 @@ fn impulsively_started_plate_carries_wagner_added_mass() {
 /// The default `wall_kinematics = "source"` (the wall's virtual points move with it in
 /// the HS divergence) misses the condition on an impulsive start: the row under the
 /// plate leaves at 1.24 / 1.26 / 1.27 V at 10 / 5 / 2.5 mm, separating from the plate,
-/// and the added mass reads 1.078 / 1.099 / 1.116, the error growing with refinement.
+/// and the added mass reads 1.078 / 1.099 / 1.116 (1.129 at 1.25 mm), the error growing
+/// with refinement towards about +15 %, the excess of the wedge's fitted slope.
 /// Why: the HS divergence gives a pair's approach in full to both particles' rows, and
 /// a virtual wall point has no row. Counting the wall's share twice in the source
 /// removes it (0.995 / 0.999 / 1.002, first row at 1.03-1.04 V), but raised the wedge's
@@ -112,16 +122,6 @@ fn impulsively_started_plate_carries_wagner_added_mass() {
 #[ignore = "fails: the default source kinematics carries 1.078 / 1.099 of the added mass at 10 / 5 mm and the row under the plate leaves at 1.24 / 1.26 V (closing note of issue 3, session 8)"]
 fn impulsively_started_plate_with_default_kinematics() {
     for l0 in [0.01, 0.005] {
-        let s = impulsive_start(l0, "source");
-        assert!(
-            (s.impulse - 1.0).abs() < 0.03,
-            "l0 = {l0}: added mass {:.4} of rho pi c² / 2 (3 % allowed)",
-            s.impulse
-        );
-        assert!(
-            (s.first_row - 1.0).abs() < 0.05,
-            "l0 = {l0}: the water under the plate leaves at {:.4} V (5 % allowed)",
-            s.first_row
-        );
+        impulsive_start(l0, "source").check(l0, 0.03, 0.05);
     }
 }
