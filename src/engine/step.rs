@@ -827,10 +827,12 @@ fn solve_pressure(sim: &mut Simulation) -> Result<(usize, Real), SimError> {
         &s.rhs,
         &mut s.solution,
         params,
-        &mut sim.solver_cache,
-        &s.particle_of,
-        s.unknown_of.len(),
-        policy,
+        pressure::Reuse {
+            cache: &mut sim.solver_cache,
+            keys: &s.particle_of,
+            key_space: s.unknown_of.len(),
+            policy,
+        },
     )
     .map_err(|e| SimError::Solver {
         step: sim.steps + 1,

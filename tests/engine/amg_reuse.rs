@@ -6,7 +6,7 @@
 
 use mpsfsi::engine::pressure::{
     conjugate_gradient, growth_limit, solve_amg_reusing, CoarseUpdate, CsrMatrix, Preconditioner,
-    ReusePolicy, SolveParams, SolverCache,
+    Reuse, ReusePolicy, SolveParams, SolverCache,
 };
 
 const PARAMS: SolveParams = SolveParams {
@@ -151,11 +151,34 @@ fn reused_hierarchy_solves_a_perturbed_matrix_like_a_fresh_one() {
         let mut cache = SolverCache::default();
         let b0 = rhs(a0.n);
         let mut x0 = vec![0.0; a0.n];
-        solve_amg_reusing(&a0, &b0, &mut x0, PARAMS, &mut cache, &keys0, m * m, policy).unwrap();
+        solve_amg_reusing(
+            &a0,
+            &b0,
+            &mut x0,
+            PARAMS,
+            Reuse {
+                cache: &mut cache,
+                keys: &keys0,
+                key_space: m * m,
+                policy,
+            },
+        )
+        .unwrap();
         let b1 = rhs(a1.n);
         let mut x1 = vec![0.0; a1.n];
-        let info = solve_amg_reusing(&a1, &b1, &mut x1, PARAMS, &mut cache, &keys1, m * m, policy)
-            .unwrap();
+        let info = solve_amg_reusing(
+            &a1,
+            &b1,
+            &mut x1,
+            PARAMS,
+            Reuse {
+                cache: &mut cache,
+                keys: &keys1,
+                key_space: m * m,
+                policy,
+            },
+        )
+        .unwrap();
         let counts = cache.counts();
         assert_eq!(
             (counts.builds, counts.reuses),
@@ -215,8 +238,19 @@ fn iterations_stay_bounded_over_a_sequence_of_steps() {
             }
         }
         let mut x_fresh = x.clone();
-        let info =
-            solve_amg_reusing(&a, &b, &mut x, PARAMS, &mut cache, &keys, m * m, policy).unwrap();
+        let info = solve_amg_reusing(
+            &a,
+            &b,
+            &mut x,
+            PARAMS,
+            Reuse {
+                cache: &mut cache,
+                keys: &keys,
+                key_space: m * m,
+                policy,
+            },
+        )
+        .unwrap();
         let fresh_info =
             conjugate_gradient(&a, &b, &mut x_fresh, PARAMS, Preconditioner::Amg).unwrap();
         assert!(residual(&a, &b, &x) < 1e-8, "step {step}");
@@ -250,7 +284,19 @@ fn interval_one_and_renumbering_rebuild() {
             rebuild_interval: interval,
             coarse: CoarseUpdate::Keep,
         };
-        solve_amg_reusing(&a, &b, &mut x, PARAMS, cache, &keys, key_space, policy).unwrap();
+        solve_amg_reusing(
+            &a,
+            &b,
+            &mut x,
+            PARAMS,
+            Reuse {
+                cache,
+                keys: &keys,
+                key_space,
+                policy,
+            },
+        )
+        .unwrap();
         x
     };
     let mut cache = SolverCache::default();
@@ -303,11 +349,34 @@ fn a_failed_reused_solve_is_repeated_with_a_new_hierarchy() {
     let mut cache = SolverCache::default();
     let b0 = rhs(a0.n);
     let mut x = vec![0.0; a0.n];
-    solve_amg_reusing(&a0, &b0, &mut x, PARAMS, &mut cache, &keys, m * m, policy).unwrap();
+    solve_amg_reusing(
+        &a0,
+        &b0,
+        &mut x,
+        PARAMS,
+        Reuse {
+            cache: &mut cache,
+            keys: &keys,
+            key_space: m * m,
+            policy,
+        },
+    )
+    .unwrap();
     let b1 = rhs(a1.n);
     let mut x1 = vec![0.0; a1.n];
-    let info =
-        solve_amg_reusing(&a1, &b1, &mut x1, tight, &mut cache, &keys, m * m, policy).unwrap();
+    let info = solve_amg_reusing(
+        &a1,
+        &b1,
+        &mut x1,
+        tight,
+        Reuse {
+            cache: &mut cache,
+            keys: &keys,
+            key_space: m * m,
+            policy,
+        },
+    )
+    .unwrap();
     let counts = cache.counts();
     eprintln!(
         "{counts:?}, {} iterations (fresh {fresh_iterations})",

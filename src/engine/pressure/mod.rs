@@ -14,7 +14,7 @@ pub use amg::Amg;
 pub use csr::CsrMatrix;
 pub use pcg::{bicgstab, conjugate_gradient, Preconditioner};
 pub use reuse::{
-    growth_limit, solve_amg_reusing, CoarseUpdate, ReuseCounts, ReusePolicy, SolverCache,
+    growth_limit, solve_amg_reusing, CoarseUpdate, Reuse, ReuseCounts, ReusePolicy, SolverCache,
 };
 
 use crate::case::SolverKind;
@@ -73,23 +73,18 @@ pub fn solve(
     }
 }
 
-/// [`solve`], with the AMG hierarchy of [`SolverCache`] reused across solves as
-/// `policy` allows (the other solvers keep nothing). `keys[row]` names the unknown of
-/// each row across solves (the particle index, below `key_space`).
-#[allow(clippy::too_many_arguments)]
+/// [`solve`], with the AMG hierarchy of [`SolverCache`] reused across solves as the
+/// policy allows (the other solvers keep nothing).
 pub fn solve_reusing(
     kind: SolverKind,
     a: &CsrMatrix,
     b: &[Real],
     x: &mut [Real],
     params: SolveParams,
-    cache: &mut SolverCache,
-    keys: &[u32],
-    key_space: usize,
-    policy: ReusePolicy,
+    reuse: Reuse,
 ) -> Result<SolveInfo, SolveError> {
     match kind {
-        SolverKind::PcgAmg => solve_amg_reusing(a, b, x, params, cache, keys, key_space, policy),
+        SolverKind::PcgAmg => solve_amg_reusing(a, b, x, params, reuse),
         _ => solve(kind, a, b, x, params),
     }
 }

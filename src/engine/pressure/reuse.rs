@@ -164,20 +164,31 @@ impl SolverCache {
     }
 }
 
-/// CG preconditioned by an AMG hierarchy taken from `cache` when `policy` allows, else
-/// built (and kept there). `keys[row]` identifies the unknown of each row across solves
-/// (the particle index, < `key_space`); `x` holds the initial guess.
-#[allow(clippy::too_many_arguments)]
+/// What a solve may carry over from earlier solves: the cache, the key of each row
+/// (`keys[row]` identifies the unknown across solves: the particle index, below
+/// `key_space`) and when to rebuild.
+pub struct Reuse<'a> {
+    pub cache: &'a mut SolverCache,
+    pub keys: &'a [u32],
+    pub key_space: usize,
+    pub policy: ReusePolicy,
+}
+
+/// CG preconditioned by an AMG hierarchy taken from the cache when the policy allows,
+/// else built (and kept there); `x` holds the initial guess.
 pub fn solve_amg_reusing(
     a: &CsrMatrix,
     b: &[Real],
     x: &mut [Real],
     params: SolveParams,
-    cache: &mut SolverCache,
-    keys: &[u32],
-    key_space: usize,
-    policy: ReusePolicy,
+    reuse: Reuse,
 ) -> Result<SolveInfo, SolveError> {
+    let Reuse {
+        cache,
+        keys,
+        key_space,
+        policy,
+    } = reuse;
     assert_eq!(keys.len(), a.n, "one key per row");
     if a.n == 0 || b.iter().all(|&v| v == 0.0) {
         return pcg_with(a, b, x, params, |r, z| z.copy_from_slice(r));
