@@ -74,7 +74,26 @@ pub fn time_to_reach<'a>(results: &[&'a BenchResult], threshold: Real) -> Option
         .min_by(|a, b| a.wall_time_s.total_cmp(&b.wall_time_s))
 }
 
-fn fmt_err(e: Real) -> String {
+/// The CFL sweep as a markdown table (report and stress report).
+pub(super) fn cfl_sweep_table(md: &mut String, rows: &[StressRow]) {
+    let _ = writeln!(
+        md,
+        "| variant | CFL | completed | error | note |\n| --- | ---: | --- | ---: | --- |"
+    );
+    for s in rows {
+        let _ = writeln!(
+            md,
+            "| {} | {} | {} | {} | {} |",
+            s.variant,
+            s.cfl,
+            s.completed,
+            fmt_err(s.error),
+            s.note.replace('|', "/")
+        );
+    }
+}
+
+pub(super) fn fmt_err(e: Real) -> String {
     if e.is_finite() {
         format!("{:.2}%", 100.0 * e)
     } else {
@@ -242,21 +261,7 @@ pub fn write_report(
     }
     if !stress.is_empty() {
         let _ = writeln!(md, "## Stability: CFL sweep of the dam break\n");
-        let _ = writeln!(
-            md,
-            "| variant | CFL | completed | error | note |\n| --- | ---: | --- | ---: | --- |"
-        );
-        for s in stress {
-            let _ = writeln!(
-                md,
-                "| {} | {} | {} | {} | {} |",
-                s.variant,
-                s.cfl,
-                s.completed,
-                fmt_err(s.error),
-                s.note.replace('|', "/")
-            );
-        }
+        cfl_sweep_table(&mut md, stress);
         md.push('\n');
         // the variants the sweep ran (`--variant` may have picked some)
         for v in variants()

@@ -522,14 +522,6 @@ fn perturbed_tank(
     out
 }
 
-fn pct(x: Real) -> String {
-    if x.is_finite() {
-        format!("{:.2}%", 100.0 * x)
-    } else {
-        "—".into()
-    }
-}
-
 /// The table of stress outcomes (markdown, with a header line).
 pub fn stress_table(rows: &[StressOutcome]) -> String {
     let mut md = String::from(
@@ -552,8 +544,8 @@ pub fn stress_table(rows: &[StressOutcome]) -> String {
             } else {
                 "—".into()
             },
-            pct(r.load_error_early),
-            pct(r.load_error_late),
+            super::report::fmt_err(r.load_error_early),
+            super::report::fmt_err(r.load_error_late),
             r.reason.replace('|', "/")
         );
     }
@@ -597,21 +589,7 @@ pub fn stress_markdown(
     );
     if !cfl.is_empty() {
         let _ = writeln!(md, "\n## CFL sweep of the dam break\n");
-        let _ = writeln!(
-            md,
-            "| variant | CFL | completed | error | note |\n| --- | ---: | --- | ---: | --- |"
-        );
-        for s in cfl {
-            let _ = writeln!(
-                md,
-                "| {} | {} | {} | {} | {} |",
-                s.variant,
-                s.cfl,
-                s.completed,
-                pct(s.error),
-                s.note.replace('|', "/")
-            );
-        }
+        super::report::cfl_sweep_table(&mut md, cfl);
     }
     md
 }
@@ -630,8 +608,8 @@ pub fn run_all(quick: bool, dir: &Path) -> io::Result<Vec<StressOutcome>> {
             o.steps,
             o.wall_time_s,
             o.max_speed,
-            pct(o.load_error_early),
-            pct(o.load_error_late),
+            super::report::fmt_err(o.load_error_early),
+            super::report::fmt_err(o.load_error_late),
             o.reason
         );
         rows.push(o);
