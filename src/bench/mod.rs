@@ -291,7 +291,7 @@ pub fn bench_cases(quick: bool) -> io::Result<Vec<BenchCase>> {
             spacings: if quick {
                 vec![0.04, 0.03, 0.02]
             } else {
-                // 2 m / l0 a whole number of columns (7.5 mm is not)
+                // 4 m and 1.2 m / l0 whole numbers of columns and rows (7.5 mm is not)
                 vec![0.02, 0.01, 0.008, 0.005]
             },
             overrides: vec![],
