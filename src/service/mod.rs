@@ -35,9 +35,8 @@ pub use startup::{serve, App, ServeError, ShutdownHandle};
 /// The HTTP contract, served as JSON by `GET /v1/openapi.json`.
 pub const OPENAPI_YAML: &str = include_str!("../../api/openapi.yaml");
 
-/// The case a `POST /v1/jobs` with an empty body runs (DESIGN.md §4: the 30° wedge).
-/// `None` until `cases/wedge_30deg_constant_velocity.json` is on this branch; switch to
-/// `Some(include_str!("../../cases/wedge_30deg_constant_velocity.json"))` then.
+/// The case a `POST /v1/jobs` with an empty body runs (DESIGN.md §4: the 30° wedge, the
+/// shipped default job); `None` would make an empty body a 400.
 pub const DEFAULT_CASE: Option<&str> = Some(include_str!(
     "../../cases/wedge_30deg_constant_velocity.json"
 ));
