@@ -91,9 +91,9 @@ fn plate_start(l0: f64, kinematics: &str, c: f64, extra: &[String]) -> Start {
 }
 
 /// `wall_kinematics = "neumann"`: the approach velocity enters the Neumann gradient of
-/// the virtual pressures, the projection's own boundary condition. Measured at 10 / 5 /
-/// 2.5 mm: 1.038 / 1.021 / 1.013 (first order in l0), the row under the plate at
-/// 1.0003 / 1.0010 / 1.0005 V.
+/// the virtual pressures, the projection's own boundary condition. Measured at 10 / 5 mm:
+/// 1.035 / 1.018, the row under the plate at 1.0003 / 1.0010 V (in the 2 m x 1 m tank of
+/// sessions 1-7: 1.038 / 1.021 / 1.013 at 10 / 5 / 2.5 mm, first order in l0).
 #[test]
 fn impulsively_started_plate_carries_wagner_added_mass() {
     let spacings = [0.01, 0.005];
@@ -115,13 +115,14 @@ fn impulsively_started_plate_carries_wagner_added_mass() {
 /// The default `wall_kinematics = "source"` (the wall's virtual points move with it in
 /// the HS divergence) misses the condition on an impulsive start: the row under the
 /// plate leaves at 1.24 / 1.26 / 1.27 V at 10 / 5 / 2.5 mm, separating from the plate,
-/// and the added mass reads 1.078 / 1.099 / 1.116 (1.129 at 1.25 mm), the error growing
-/// with refinement towards about +15 %, the excess of the wedge's fitted slope.
+/// and the added mass reads 1.078 / 1.099 / 1.116 (1.129 at 1.25 mm; 2 m x 1 m tank, 1.075
+/// at 10 mm in the shipped one), the error growing with refinement towards about +15 %,
+/// the excess of the wedge's fitted slope.
 /// Why: the HS divergence gives a pair's approach in full to both particles' rows, and
 /// a virtual wall point has no row. Counting the wall's share twice in the source
 /// removes it (0.995 / 0.999 / 1.002, first row at 1.03-1.04 V), but raised the wedge's
-/// C_F (ensembles 14.6 / 15.5 at 10 / 8 mm, two runs at 5 mm 15.8 and 16.7), so it was
-/// not kept. A flat-bottomed body dropped on water is where this matters.
+/// C_F (2 m x 1 m tank: ensembles 14.6 / 15.5 at 10 / 8 mm, two runs at 5 mm 15.8 and
+/// 16.7, against 14.71 / 14.99 / 15.53 without), so it was not kept. A flat-bottomed body dropped on water is where this matters.
 #[test]
 #[ignore = "fails: the default source kinematics carries 1.078 / 1.099 of the added mass at 10 / 5 mm and the row under the plate leaves at 1.24 / 1.26 V (closing note of issue 3, session 8)"]
 fn impulsively_started_plate_with_default_kinematics() {
