@@ -27,6 +27,21 @@ impl Rng {
 }
 
 /// An m × m block of particles (unit spacing) jittered by `jitter`.
+
+/// The reuse arguments of one solve.
+fn reuse<'a>(
+    cache: &'a mut SolverCache,
+    keys: &'a [u32],
+    key_space: usize,
+    policy: ReusePolicy,
+) -> Reuse<'a> {
+    Reuse {
+        cache,
+        keys,
+        key_space,
+        policy,
+    }
+}
 fn particles(m: usize, jitter: f64, seed: u64) -> Vec<(f64, f64)> {
     let mut rng = Rng(seed);
     (0..m * m)
@@ -156,12 +171,7 @@ fn reused_hierarchy_solves_a_perturbed_matrix_like_a_fresh_one() {
             &b0,
             &mut x0,
             PARAMS,
-            Reuse {
-                cache: &mut cache,
-                keys: &keys0,
-                key_space: m * m,
-                policy,
-            },
+            reuse(&mut cache, &keys0, m * m, policy),
         )
         .unwrap();
         let b1 = rhs(a1.n);
@@ -171,12 +181,7 @@ fn reused_hierarchy_solves_a_perturbed_matrix_like_a_fresh_one() {
             &b1,
             &mut x1,
             PARAMS,
-            Reuse {
-                cache: &mut cache,
-                keys: &keys1,
-                key_space: m * m,
-                policy,
-            },
+            reuse(&mut cache, &keys1, m * m, policy),
         )
         .unwrap();
         let counts = cache.counts();
@@ -243,12 +248,7 @@ fn iterations_stay_bounded_over_a_sequence_of_steps() {
             &b,
             &mut x,
             PARAMS,
-            Reuse {
-                cache: &mut cache,
-                keys: &keys,
-                key_space: m * m,
-                policy,
-            },
+            reuse(&mut cache, &keys, m * m, policy),
         )
         .unwrap();
         let fresh_info =
@@ -289,12 +289,7 @@ fn interval_one_and_renumbering_rebuild() {
             &b,
             &mut x,
             PARAMS,
-            Reuse {
-                cache,
-                keys: &keys,
-                key_space,
-                policy,
-            },
+            reuse(cache, &keys, key_space, policy),
         )
         .unwrap();
         x
@@ -354,12 +349,7 @@ fn a_failed_reused_solve_is_repeated_with_a_new_hierarchy() {
         &b0,
         &mut x,
         PARAMS,
-        Reuse {
-            cache: &mut cache,
-            keys: &keys,
-            key_space: m * m,
-            policy,
-        },
+        reuse(&mut cache, &keys, m * m, policy),
     )
     .unwrap();
     let b1 = rhs(a1.n);
@@ -369,12 +359,7 @@ fn a_failed_reused_solve_is_repeated_with_a_new_hierarchy() {
         &b1,
         &mut x1,
         tight,
-        Reuse {
-            cache: &mut cache,
-            keys: &keys,
-            key_space: m * m,
-            policy,
-        },
+        reuse(&mut cache, &keys, m * m, policy),
     )
     .unwrap();
     let counts = cache.counts();
