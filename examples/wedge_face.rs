@@ -68,7 +68,7 @@ fn main() {
         }
     }
     println!(
-        "mean C_F over 0.5..0.6 t_chine: {:.3} ({} steps)",
+        "mean C_F over {ta}..{tb} t_chine: {:.3} ({} steps)",
         cf.0 / cf.1,
         cf.1
     );
