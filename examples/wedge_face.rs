@@ -26,7 +26,7 @@ fn main() {
     let nb = edges.len() - 1;
     let mut acc = vec![[0.0f64; 6]; nb];
     let mut cf = (0.0, 0.0);
-    let mut acc2 = vec![[0.0f64; 2]; nb]; // second row (0.8..1.6 l0): n/n0, Cp
+    let mut acc2 = vec![[0.0f64; 2]; nb]; // second row (0.8..1.6 l0): count, sum of Cp
     let window = |name: &str, default: f64| -> f64 {
         std::env::var(name).map_or(default, |v| v.parse().expect("TA and TB are numbers"))
     };
