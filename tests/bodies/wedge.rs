@@ -343,9 +343,8 @@ fn wedge_force_coefficient_converges_with_spacing() {
 /// must be within 25 % of the similarity solution's peak (6.927) and of its table.
 /// Measured in the 4 m x 1.2 m tank: C_F = 16.75 ± 1.30, impulse origin -0.35 ms
 /// (t_chine = 14.9 ms); peak Cp 6.41 at z/(Vt) = 0.40 (-7.5 %); the profile within 12 %
-/// of the table (4.96 at the keel, 5.81 at 0.3); 48 000 particles, 15 s alone (44 s beside the
-/// other tests). (2 m x 1 m tank:
-/// C_F 15.61 ± 1.15, peak Cp 5.76.)
+/// of the table (4.96 at the keel, 5.81 at 0.3); 48 000 particles, 15 s alone (44 s
+/// beside the other tests). (2 m x 1 m tank: C_F 15.61 ± 1.15, peak Cp 5.76.)
 #[test]
 fn wedge_force_and_pressure_at_one_centimetre() {
     let fit = wedge_fit(&["particle_spacing=0.01".into()]);
