@@ -1,13 +1,21 @@
 //! Dam break (Koshizuka & Oka 1996 geometry, l0 = a/40) against Martin & Moyce (1952).
 //!
-//! Measured (closing note of the engine issue): the front runs 13-21% ahead of the
-//! experiment over 1 <= T <= 3 (session 7, the case at CFL 0.15 with the fill floor:
-//! 9-21%, front speed +9.7%; +8.6% at CFL 0.2) and the gap does not shrink from a/40
-//! to a/60; it opens before T = 1.2 (experiment: Z = 1.22 at T = 0.84, simulation 1.41), which
-//! references.md attributes to the gate release. After that the simulated front moves
-//! at the experimental speed. This test therefore asserts (a) the front speed
-//! dZ/dT over 1.19 <= T <= 2.83 within 10% of Martin & Moyce's, and (b) the position
-//! within 25% for 1 <= T <= 3 — looser than the issue's 10% target, which is NOT met.
+//! Measured (closing notes of the engine issue): the front runs 13-21 % ahead of the
+//! experiment over 1 <= T <= 3 (session 9: +21.0 % at T = 1.19 falling to +14.4 % at
+//! 2.83), and the gap does not shrink from a/40 to a/60. It is a delay, not a speed:
+//! the experiment reaches each simulated front position 0.294-0.326 later in T (mean
+//! 0.308) at every sample from T = 0.84 to 2.83, 17 ms at Martin & Moyce's a = 57 mm,
+//! the order of a gate's release. references.md attributes the early times to the
+//! release. At T = 0.41 the two agree (1.10 against 1.11): water leaves under a rising
+//! gate before the column falls. Neither a turbulent wall friction nor viscosity closes
+//! it without being fitted (session 9, closing note): a log-law wall shear on the first
+//! row changes the front by under 1 %, and only an eddy viscosity of 1e-3-3e-3 m²/s,
+//! 1000-3000 times water's and above a mixing-length estimate for this flow (about
+//! 2e-4-5e-4), brings it within 10 %.
+//! This test therefore asserts (a) the position within 25 % for 1 <= T <= 3 (looser
+//! than the issue's 10 % target, which is NOT met) and (b) that the front history is
+//! the experiment's delayed by a constant: the delay varies by under 0.1 across the
+//! window and lies in 0..0.45.
 //!
 //! The same run also follows Martin & Moyce's second measurement, the residual column
 //! height at the back wall, which the gate release and the bottom friction barely touch:
@@ -87,21 +95,46 @@ fn surge_front_follows_martin_and_moyce() {
             100.0 * err
         );
     }
-    let at = |tt: f64| {
-        front
-            .iter()
-            .find(|(t, _, _)| *t >= tt - 1e-9)
-            .copied()
-            .unwrap()
-    };
-    let (t0, z0, r0) = at(1.19);
-    let (t1, z1, r1) = at(2.83);
-    let speed = (z1 - z0) / (t1 - t0);
-    let speed_ref = (r1 - r0) / (2.83 - 1.19);
+    // (b) the front history is the experiment's, delayed by a constant: for each
+    // simulated position, the time at which Martin & Moyce's front reached it, minus the
+    // time here. A front speed off by 6 % would drift this delay by more than 0.1 over
+    // the window. The tank is 4a wide: the front stops on its far wall (Z = 4), so
+    // positions within l0 of it are left out.
+    let far_wall = 4.0 - l0 / a;
+    let delays: Vec<(f64, f64)> = in_window
+        .iter()
+        .filter(|(_, z, _)| *z < far_wall)
+        .map(|(t, z, _)| (*t, experiment_time(*z) - t))
+        .collect();
+    println!("delay behind Martin & Moyce (T, experiment's T at the same Z minus T): {delays:.3?}");
     assert!(
-        (speed / speed_ref - 1.0).abs() < 0.10,
-        "front speed {speed:.3} vs {speed_ref:.3}"
+        delays.len() >= 9,
+        "too few samples before the far wall: {delays:?}"
     );
+    let (lo, hi) = delays
+        .iter()
+        .fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), (_, d)| {
+            (lo.min(*d), hi.max(*d))
+        });
+    assert!(
+        hi - lo < 0.1,
+        "the delay behind the experiment drifts from {lo:.3} to {hi:.3}: the front speed is off"
+    );
+    // a release lag of at most 0.45 (24 ms at Martin & Moyce's a = 57 mm)
+    assert!(
+        lo > 0.0 && hi < 0.45,
+        "delay {lo:.3}..{hi:.3} outside 0..0.45"
+    );
+}
+
+/// The time T at which Martin & Moyce's front reached Z (linear between their samples).
+fn experiment_time(z: f64) -> f64 {
+    let k = MARTIN_MOYCE
+        .windows(2)
+        .position(|w| z <= w[1].1)
+        .unwrap_or_else(|| panic!("Z = {z:.3} is beyond Martin & Moyce's table"));
+    let ((t0, z0), (t1, z1)) = (MARTIN_MOYCE[k], MARTIN_MOYCE[k + 1]);
+    t0 + (z - z0) / (z1 - z0) * (t1 - t0)
 }
 
 /// Stress (issue 6): the dam break to 5 s at a/40, through the impact on the far wall, the
