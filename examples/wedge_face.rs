@@ -2,7 +2,10 @@
 //! Bands of z/(Vt) along the faces; per band, for particles within 0.8 l0 of the face:
 //! mean distance d/l0, number density n/n0, Cp, relative normal velocity (u - u_w)·n / V
 //! (positive: leaving the face) and the share flagged free surface.
-//! Also prints the mean F / (rho V³ t) over the window.
+//! Also prints the mean F / (rho V³ t) over the window, and where its step-to-step noise
+//! lives: the RMS change between steps of the load and of the first row's force
+//! (p l0 n_y over particles within 0.8 l0), split into particles whose free-surface flag
+//! flipped since the previous step and the rest, with the load's autocorrelation.
 //! `TA=0.5 TB=0.6 cargo run --release --example wedge_face -- [PATH=VALUE]...`
 //! (the window in units of t_chine; those are the defaults)
 use mpsfsi::case::load_case_file;
@@ -31,11 +34,13 @@ fn main() {
         std::env::var(name).map_or(default, |v| v.parse().expect("TA and TB are numbers"))
     };
     let (ta, tb) = (window("TA", 0.5), window("TB", 0.6));
+    let mut noise = Noise::default();
     while sim.time < tb * t_chine {
         let dt = sim.next_dt();
         coupling.before_step(&mut sim, dt);
         sim.step(dt).unwrap();
         coupling.after_step(&mut sim, dt);
+        noise.record(&sim, k, v, sim.time >= ta * t_chine);
         if sim.time < ta * t_chine {
             continue;
         }
@@ -87,6 +92,93 @@ fn main() {
             a[4] / m,
             a[5] / m,
             acc2[b][1] / acc2[b][0].max(1.0)
+        );
+    }
+    noise.report();
+}
+
+/// Step-to-step changes of the wedge's load, as F / (rho V³ t).
+#[derive(Default)]
+struct Noise {
+    prev_flag: Vec<bool>,
+    /// (load, first row, first row without the flipped particles) of the previous step
+    prev: Option<(f64, f64, f64)>,
+    /// sums of squared changes: load, first row, flipped particles, the rest
+    squares: [f64; 4],
+    loads: Vec<f64>,
+    flips: f64,
+}
+
+impl Noise {
+    fn record(&mut self, sim: &Simulation, k: u32, v: f64, in_window: bool) {
+        let p = &sim.particles;
+        let l0 = sim.params.l0;
+        let scale = 1000.0 * v.powi(3) * sim.time;
+        let (mut row, mut flipped, mut steady, mut flips) = (0.0, 0.0, 0.0, 0.0);
+        for i in 0..p.len() {
+            for c in sim.wall_contacts().of(i).iter().filter(|c| c.object == k) {
+                if c.distance >= 0.8 * l0 {
+                    continue;
+                }
+                let f = -p.pressure[i] * l0 * c.normal.y / scale;
+                row += f;
+                if i < self.prev_flag.len() && self.prev_flag[i] != p.free_surface[i] {
+                    flipped += f;
+                    flips += 1.0;
+                } else {
+                    steady += f;
+                }
+            }
+        }
+        let load = sim.loads[k as usize].force.y / scale;
+        self.prev_flag = p.free_surface.clone();
+        if let (true, Some((l, r, s))) = (in_window, self.prev) {
+            // a flipped particle's whole force is the change it brings
+            self.squares[0] += (load - l).powi(2);
+            self.squares[1] += (row - r).powi(2);
+            self.squares[2] += flipped.powi(2);
+            self.squares[3] += (steady - s).powi(2);
+            self.loads.push(load);
+            self.flips += flips;
+        }
+        self.prev = Some((load, row, steady));
+    }
+
+    fn report(&self) {
+        let m = self.loads.len();
+        if m < 10 {
+            return;
+        }
+        let n = m as f64;
+        let mean = self.loads.iter().sum::<f64>() / n;
+        let rms = |s: f64| (s / n).sqrt() / mean;
+        println!(
+            "RMS step-to-step change / mean: load {:.3}, first row {:.3}, particles whose surface flag flipped {:.3}, the rest {:.3}; {:.1} flips per step",
+            rms(self.squares[0]),
+            rms(self.squares[1]),
+            rms(self.squares[2]),
+            rms(self.squares[3]),
+            self.flips / n
+        );
+        // autocorrelation of the load about its 9-step moving mean
+        let r: Vec<f64> = (0..m)
+            .map(|i| {
+                let (a, b) = (i.saturating_sub(4), (i + 5).min(m));
+                self.loads[i] - self.loads[a..b].iter().sum::<f64>() / (b - a) as f64
+            })
+            .collect();
+        let c0: f64 = r.iter().map(|x| x * x).sum();
+        let ac: Vec<String> = (1..5)
+            .map(|lag| {
+                format!(
+                    "{:+.2}",
+                    (lag..m).map(|i| r[i] * r[i - lag]).sum::<f64>() / c0
+                )
+            })
+            .collect();
+        println!(
+            "autocorrelation of the load's fluctuation at lags 1-4 steps: {}",
+            ac.join(" ")
         );
     }
 }
