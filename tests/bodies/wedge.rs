@@ -313,9 +313,15 @@ pub fn wedge_ensemble(l0: f64, members: usize, extra: &[String]) -> (f64, f64, V
 /// ensemble holds one mirror-symmetric member (offset 0: 16.75 / 13.04 / 16.41, see
 /// `wedge_force_coefficient_at_default_spacing`); the others alone read 14.31 ± 0.39 /
 /// 14.57 ± 0.17 / 14.76 ± 0.07, +1.9 ± 2.8 / +3.8 ± 1.2 / +5.2 ± 0.5 %: if anything the
-/// error grows with refinement (not resolved: 10 to 5 mm is +3.3 ± 2.8 %), as the
-/// impulsively started plate's does with the default wall kinematics
-/// (tests/bodies/plate_impulse.rs: +7.5 % at 10 mm, +9.9 % at 5 mm).
+/// error grows with refinement (10 to 5 mm alone is +3.3 ± 2.8 %), and one run at
+/// 2.5 mm (shift l0/8, 768 000 particles, 32 minutes) resolves it: 15.39 ± 0.23
+/// (+9.6 %), the two-parameter fit agreeing (15.36, t0 -0.015 ms), peak Cp 6.52 at
+/// z/(Vt) = 0.40 (-5.9 %), the lower face +8 %. The wedge follows the impulsively
+/// started plate with the default wall kinematics (tests/bodies/plate_impulse.rs: +7.5 /
+/// +9.9 / +11.6 / +12.9 % at 10 / 5 / 2.5 / 1.25 mm): the error converges to that
+/// added-mass excess, not to zero. With `wall_kinematics = "neumann"` (the plate within
+/// 1-4 %) two runs off the mirror line at 5 mm read 12.85 / 12.57 (-8.5 / -10.5 %): the
+/// lower face within 1-3 %, the peak region 20-30 % low.
 ///
 /// Where the excess comes from (session 6, the window-averaged pressure profile printed
 /// by `wedge_fit`): the lower face reads Cp 5.0-5.2 against the table's 4.54-4.62 at 5 mm
