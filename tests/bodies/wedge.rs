@@ -317,7 +317,7 @@ pub fn wedge_ensemble(l0: f64, members: usize, extra: &[String]) -> (f64, f64, V
 /// 2.5 mm (shift l0/8, 768 000 particles, 32 minutes) resolves it: 15.39 ± 0.23
 /// (+9.6 %), the two-parameter fit agreeing (15.36, t0 -0.015 ms), peak Cp 6.52 at
 /// z/(Vt) = 0.40 (-5.9 %), the lower face +8 %. The wedge follows the impulsively
-/// started plate with the default wall kinematics (tests/bodies/plate_impulse.rs: +7.5 /
+/// started plate with the default wall kinematics (tests/bodies/plate_impulse.rs: +7.8 /
 /// +9.9 / +11.6 / +12.9 % at 10 / 5 / 2.5 / 1.25 mm): the error converges to that
 /// added-mass excess, not to zero. With `wall_kinematics = "neumann"` (the plate within
 /// 1-4 %) two runs off the mirror line at 5 mm read 12.85 / 12.57 (-8.5 / -10.5 %): the
