@@ -3,9 +3,10 @@
 //! Measured (closing notes of the engine issue): the front runs 13-21 % ahead of the
 //! experiment over 1 <= T <= 3 (session 9: +21.0 % at T = 1.19 falling to +14.4 % at
 //! 2.83), and the gap does not shrink from a/40 to a/60. It is a delay, not a speed:
-//! the experiment reaches each simulated front position 0.294-0.326 later in T (mean
-//! 0.308) at every sample from T = 0.84 to 2.83, 17 ms at Martin & Moyce's a = 57 mm,
-//! the order of a gate's release. references.md attributes the early times to the
+//! the experiment reaches each simulated front position 0.29-0.33 later in T (mean
+//! 0.31) at every sample from T = 0.84 to 2.83, 17 ms at Martin & Moyce's a = 57 mm,
+//! the order of a gate's release. The delay converges with resolution: mean 0.262 /
+//! 0.281 / 0.310 / 0.317 at a/20 / a/30 / a/40 / a/60, spread at most 0.032 at each. references.md attributes the early times to the
 //! release. At T = 0.41 the two agree (1.10 against 1.11): water leaves under a rising
 //! gate before the column falls. Neither a turbulent wall friction nor viscosity closes
 //! it without being fitted (session 9, closing note): a log-law wall shear on the first
