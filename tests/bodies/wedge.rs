@@ -261,9 +261,10 @@ impl PressureProfile {
 /// scatter 0.97 of the mean against 0.56-0.62 at 1 cm) and the face's Cp is higher in
 /// every band (+10-12 % on the lower face, up to +41 % at z/(Vt) = 0.3-0.45; the
 /// first row holds on to the face above the spray root: 1.6 particles per step at
-/// z/(Vt) = 0.75-1 against 0.1; `examples/wedge_face`, 0.3-0.8 t_chine). At 1 cm: 16.75 symmetric, 16.51 at
-/// 1e-7 m, 13.59 at 1e-5 m, 14.02 at 1 mm, 14.09 at l0/32. The case is left symmetric
-/// (a symmetric setup is what users submit); the ensembles below shift the wedge.
+/// z/(Vt) = 0.75-1 against 0.1; `examples/wedge_face`, 0.3-0.8 t_chine).
+/// At 1 cm: 16.75 symmetric, 16.51 at 1e-7 m, 13.59 at 1e-5 m, 14.02 at 1 mm, 14.09 at
+/// l0/32. The case is left symmetric (a symmetric setup is what users submit); the
+/// ensembles below shift the wedge.
 #[test]
 fn wedge_force_coefficient_at_default_spacing() {
     let fit = wedge_fit(&[]);
