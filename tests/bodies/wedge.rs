@@ -314,10 +314,11 @@ pub fn wedge_ensemble(l0: f64, members: usize, extra: &[String]) -> (f64, f64, V
 /// ensemble holds one mirror-symmetric member (offset 0: 16.75 / 13.04 / 16.41, see
 /// `wedge_force_coefficient_at_default_spacing`); the others alone read 14.31 ± 0.39 /
 /// 14.57 ± 0.17 / 14.76 ± 0.07, +1.9 ± 2.8 / +3.8 ± 1.2 / +5.2 ± 0.5 %: if anything the
-/// error grows with refinement (10 to 5 mm alone is +3.3 ± 2.8 %), and one run at
-/// 2.5 mm (shift l0/8, 768 000 particles, 32 minutes) resolves it: 15.39 ± 0.23
-/// (+9.6 %), the two-parameter fit agreeing (15.36, t0 -0.015 ms), peak Cp 6.52 at
-/// z/(Vt) = 0.40 (-5.9 %), the lower face +8 %. The wedge follows the impulsively
+/// error grows with refinement (10 to 5 mm alone is +3.3 ± 2.8 %), and two runs at
+/// 2.5 mm (shifts l0/8 and l0/4, 768 000 particles, 24-32 minutes each) resolve it:
+/// 15.39 ± 0.23 and 15.91 ± 0.23 (+11.5 ± 1.9 %), the two-parameter fits agreeing
+/// (15.36 and 17.04, t0 -0.015 and 0.57 ms), peak Cp 6.52 and 6.74 at z/(Vt) = 0.40
+/// and 0.425 (-4.3 % on average), the lower face +8-13 %. The wedge follows the impulsively
 /// started plate with the default wall kinematics (tests/bodies/plate_impulse.rs: +7.8 /
 /// +9.9 / +11.6 / +12.9 % at 10 / 5 / 2.5 / 1.25 mm): the error converges to that
 /// added-mass excess, not to zero. With `wall_kinematics = "neumann"` (the plate within
