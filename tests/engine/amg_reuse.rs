@@ -26,8 +26,6 @@ impl Rng {
     }
 }
 
-/// An m × m block of particles (unit spacing) jittered by `jitter`.
-
 /// The reuse arguments of one solve.
 fn reuse<'a>(
     cache: &'a mut SolverCache,
@@ -42,6 +40,8 @@ fn reuse<'a>(
         policy,
     }
 }
+
+/// An m × m block of particles (unit spacing) jittered by `jitter`.
 fn particles(m: usize, jitter: f64, seed: u64) -> Vec<(f64, f64)> {
     let mut rng = Rng(seed);
     (0..m * m)
