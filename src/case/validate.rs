@@ -17,7 +17,7 @@
 //! 6. names: walls and bodies share the `body` column of loads.csv, so their names are
 //!    unique together and non-empty; probe names likewise among probes.
 
-use super::{Body, Case, CaseError, Motion, Point};
+use super::{Body, Case, CaseError, Motion, Point, Projection, SourceKind};
 use crate::engine::math::{vec2, Real, Vec2};
 use crate::engine::walls::geometry::{inside, segments_intersect, signed_area};
 use serde::ser::{self, Serialize};
@@ -570,6 +570,29 @@ fn check_scalars(case: &Case) -> Check {
                 s.velocity_filter
             ),
         );
+    }
+    if s.projection == Projection::Exact {
+        if !(s.exact_projection_blend > 0.0 && s.exact_projection_blend <= 1.0) {
+            return reject(
+                "scheme.exact_projection_blend",
+                format!(
+                    "must lie in (0, 1]: the share of the Laplacian kept in the exact rows (got {})",
+                    s.exact_projection_blend
+                ),
+            );
+        }
+        if s.source == SourceKind::Pnd {
+            return reject(
+                "scheme.projection",
+                "\"exact\" needs a divergence source (higher_order, higher_order_ecs or mixed), not \"pnd\"",
+            );
+        }
+        if s.compressibility != 0.0 {
+            return reject(
+                "scheme.projection",
+                "\"exact\" does not carry the quasi-compressibility: set scheme.compressibility to 0",
+            );
+        }
     }
     if let Some(v) = s.max_speed {
         positive(

@@ -28,13 +28,15 @@ use super::simulation::{SimError, Simulation, StepInfo, WallLoad};
 use super::walls::pressure_load::pressure_loads;
 use super::walls::{moment_about, PlacedWall, WallContact, WallContacts, WallKernels, WallWeights};
 use crate::case::{
-    GradientKind, LaplacianKind, SourceKind, SpacingControl, ViscosityKind, WallKinematics,
-    WallLoadKind,
+    GradientKind, LaplacianKind, Projection, SourceKind, SpacingControl, ViscosityKind,
+    WallKinematics, WallLoadKind,
 };
 use crate::with_kernel;
 use rayon::prelude::*;
 use std::marker::PhantomData;
 use std::time::Instant;
+
+mod exact;
 
 /// Buffers reused from step to step.
 #[derive(Debug, Default)]
@@ -51,6 +53,9 @@ pub(crate) struct Scratch {
     /// Dirichlet value of each free-surface particle (0 elsewhere).
     surface_pressure: Vec<Real>,
     matrix: CsrMatrix,
+    /// The source's terms beyond (rho/dt) ∇·u* (ECS, PND relaxation), per particle, for
+    /// the exact projection.
+    source_extra: Vec<Real>,
 }
 
 struct KernelWeights<K> {
@@ -188,7 +193,10 @@ fn step<K: Kernel>(sim: &mut Simulation, dt: Real) -> Result<StepInfo, SimError>
     compute_neumann_gradients(sim, dt);
     assemble_pressure_equation::<K>(sim, &weights, dt);
     sim.stage_times.assemble += seconds(&mut clock);
-    let (iterations, residual) = solve_pressure(sim)?;
+    let (mut iterations, residual) = solve_pressure(sim)?;
+    if sim.scheme.projection == Projection::Exact {
+        iterations += exact::correct_to_exact_projection::<K>(sim, dt)?;
+    }
     sim.stage_times.solve += seconds(&mut clock);
 
     // u^{n+1} = u* - dt/rho ∇p, x^{n+1} = x* + dt (u^{n+1} - u*); wall loads as reactions
@@ -662,6 +670,14 @@ fn assemble_pressure_equation<K: Kernel>(
             }
         }
     };
+    let source_extra: Vec<Real> = if sim.scheme.projection == Projection::Exact {
+        (0..np)
+            .into_par_iter()
+            .map(|i| source_of(i) - rho / dt * div_star[i])
+            .collect()
+    } else {
+        Vec::new()
+    };
     let compress = rho * sim.scheme.compressibility / (dt * dt);
     let rho_g = vec2(p.gravity) * rho;
     let well_balanced = sim.scheme.hydrostatic_ghosts;
@@ -805,6 +821,7 @@ fn assemble_pressure_equation<K: Kernel>(
     sim.scratch.rhs = rhs;
     sim.scratch.unknown_of = unknown_of;
     sim.scratch.particle_of = particle_of;
+    sim.scratch.source_extra = source_extra;
 }
 
 fn solve_pressure(sim: &mut Simulation) -> Result<(usize, Real), SimError> {

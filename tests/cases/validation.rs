@@ -186,6 +186,36 @@ fn scheme_ranges() {
 }
 
 #[test]
+fn exact_projection_requirements() {
+    for bad in [0.0, 1.5] {
+        assert_error(
+            &rejected_json(|v| {
+                v["scheme"]["projection"] = json!("exact");
+                v["scheme"]["exact_projection_blend"] = json!(bad);
+            }),
+            "scheme.exact_projection_blend",
+            "(0, 1]",
+        );
+    }
+    assert_error(
+        &rejected_json(|v| {
+            v["scheme"]["projection"] = json!("exact");
+            v["scheme"]["source"] = json!("pnd");
+        }),
+        "scheme.projection",
+        "divergence source",
+    );
+    assert_error(
+        &rejected_json(|v| {
+            v["scheme"]["projection"] = json!("exact");
+            v["scheme"]["compressibility"] = json!(1e-9);
+        }),
+        "scheme.projection",
+        "compressibility",
+    );
+}
+
+#[test]
 fn domain_min_not_below_max() {
     let e = rejected_json(|v| v["domain"]["min"] = json!([-0.5, 0.5]));
     assert_error(&e, "domain", "in y");

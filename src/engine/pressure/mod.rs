@@ -7,11 +7,13 @@
 
 mod amg;
 mod csr;
+mod gmres;
 mod pcg;
 mod reuse;
 
 pub use amg::Amg;
 pub use csr::CsrMatrix;
+pub use gmres::gmres;
 pub use pcg::{bicgstab, conjugate_gradient, Preconditioner};
 pub use reuse::{
     growth_limit, solve_amg_reusing, CoarseUpdate, Reuse, ReuseCounts, ReusePolicy, SolverCache,

@@ -113,6 +113,18 @@ impl SolverCache {
         self.keys.clear();
     }
 
+    /// z = M⁻¹ r with the cached hierarchy (one V-cycle on the fine matrix `a`, the
+    /// matrix it was built or refitted for); false when there is none.
+    pub fn precondition(&mut self, a: &CsrMatrix, r: &[Real], z: &mut [Real]) -> bool {
+        match self.hierarchy.as_mut() {
+            Some(h) if self.keys.len() == a.n => {
+                h.apply(a, r, z);
+                true
+            }
+            _ => false,
+        }
+    }
+
     pub fn counts(&self) -> ReuseCounts {
         self.counts
     }
