@@ -56,6 +56,9 @@ pub(crate) struct Scratch {
     /// The source's terms beyond (rho/dt) ∇·u* (ECS, PND relaxation), per particle, for
     /// the exact projection.
     source_extra: Vec<Real>,
+    /// The exact projection's correction to the approximate pressure, per particle
+    /// (the next step's initial guess).
+    exact_correction: Vec<Real>,
 }
 
 struct KernelWeights<K> {
