@@ -56,6 +56,9 @@ fn plate_start(l0: f64, kinematics: &str, c: f64, extra: &[String]) -> Start {
             "bodies.0.polygon=[[{m}, 0.0], [{c}, 0.0], [{c}, 0.02], [{m}, 0.02]]",
             m = -c
         ),
+        // centred on the lattice's mirror line, as measured (the wedge case shifts its
+        // body 1.1 mm off it)
+        "bodies.0.position=[0.0, 0.0]".into(),
         format!("bodies.0.motion.velocity=[0.0, {}]", -V),
         format!("time.max_dt={DT}"),
         format!("scheme.wall_kinematics=\"{kinematics}\""),
