@@ -17,6 +17,10 @@
 //! already carried by the Neumann term; counting it twice over-corrects). With the PND
 //! source (classic scheme) virtual points take p_i (Harada et al. 2008) and the wall
 //! acts through the number density alone.
+//!
+//! With `scheme.projection = "exact"` the solved pressure is then corrected so that the
+//! rows away from the free surface carry the HS divergence of the corrected velocity
+//! itself instead of the Laplacian (`exact`: GMRES, preconditioned by the same AMG).
 
 use super::kernel::Kernel;
 use super::math::{vec2, Mat2, Real, Vec2};
