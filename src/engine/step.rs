@@ -965,19 +965,13 @@ fn correct_velocity_and_position<K: Kernel>(
                     (s_sym + wall_m1 * (2.0 * (p[i] - p_min[i])) + wall_linear) * c_grad
                 }
                 _ => {
-                    // GC: C = [(1/n0) Σ w r rᵀ / r²]⁻¹; on the full lattice C = d I.
-                    let mm = moment / n0;
-                    let det = mm.determinant();
-                    let lattice_det = (1.0 / crate::engine::params::DIM).powi(2);
                     // plus the repulsive part of the minimum-pressure form, (p_i - p̂_i) Σ r w / r²,
                     // over pairs closer than `stabilization_distance`: silent on the lattice (still
                     // water stays still), pushing particles apart where they cluster
                     let stabilizer = s_close * ((p[i] - p_min[i]) * kappa * c_grad);
-                    match mm.try_inverse() {
-                        Some(c) if det > 0.3 * lattice_det => {
-                            c * (s_fluid + wall_linear) / n0 + stabilizer
-                        }
-                        _ => classic,
+                    match corrected_gradient_matrix(&moment, n0) {
+                        Some(c) => c * (s_fluid + wall_linear) / n0 + stabilizer,
+                        None => classic,
                     }
                 }
             }
@@ -1029,6 +1023,20 @@ fn correct_velocity_and_position<K: Kernel>(
         .zip(x.par_iter())
         .zip(total.par_iter())
         .for_each(|((pos, xs), g)| *pos = xs - g * (scale * dt));
+}
+
+/// The GC matrix C = [(1/n0) Σ w r rᵀ / r²]⁻¹ from the moments Σ w r rᵀ / r² (fluid
+/// and virtual wall points); on the full lattice C = d I. `None` where the moments are
+/// too degenerate to invert safely (below 0.3 of the lattice's determinant): the
+/// gradient then falls back to the classic normalisation.
+fn corrected_gradient_matrix(moment: &Mat2, n0: Real) -> Option<Mat2> {
+    let mm = moment / n0;
+    let lattice_det = (1.0 / DIM).powi(2);
+    if mm.determinant() > 0.3 * lattice_det {
+        mm.try_inverse()
+    } else {
+        None
+    }
 }
 
 /// Safety net: pairwise collision below `collision_distance` l0 and an inelastic

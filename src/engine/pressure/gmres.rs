@@ -2,12 +2,9 @@
 //! whose rows (the HS divergence of the corrected velocity) are not symmetric.
 //! Right preconditioning keeps the residual it minimises the true one.
 
+use super::pcg::{axpy, dot};
 use super::{SolveError, SolveInfo, SolveParams};
 use crate::engine::math::Real;
-
-fn dot(a: &[Real], b: &[Real]) -> Real {
-    a.iter().zip(b).map(|(x, y)| x * y).sum()
-}
 
 /// Solve A x = b, A given by `apply(v, out)`, with the preconditioner
 /// `precondition(r, z)` (z ≈ A⁻¹ r); `x` holds the initial guess on entry.
@@ -66,7 +63,7 @@ pub fn gmres(
             for (j, v) in basis.iter().enumerate() {
                 let hj = dot(&w, v);
                 h[j][k] = hj;
-                w.iter_mut().zip(v).for_each(|(wi, vi)| *wi -= hj * vi);
+                axpy(&mut w, -hj, v);
             }
             let norm = dot(&w, &w).sqrt();
             h[k + 1][k] = norm;
@@ -101,8 +98,8 @@ pub fn gmres(
             y[i] = (g[i] - s) / h[i][i];
         }
         let mut update = vec![0.0; n];
-        for (v, yi) in basis.iter().zip(&y) {
-            update.iter_mut().zip(v).for_each(|(u, vi)| *u += yi * vi);
+        for (v, &yi) in basis.iter().zip(&y) {
+            axpy(&mut update, yi, v);
         }
         precondition(&update, &mut z);
         x.iter_mut().zip(&z).for_each(|(xi, zi)| *xi += zi);

@@ -20,7 +20,7 @@ pub enum Preconditioner {
 /// in parallel on a loaded 2-core machine).
 pub(crate) const PARALLEL_MIN: usize = 32_768;
 
-fn dot(a: &[Real], b: &[Real]) -> Real {
+pub(crate) fn dot(a: &[Real], b: &[Real]) -> Real {
     if a.len() < PARALLEL_MIN {
         // same chunking as deterministic_sum, so the result does not depend on the path
         let mut total = 0.0;
@@ -36,7 +36,7 @@ fn dot(a: &[Real], b: &[Real]) -> Real {
     deterministic_sum(a.len(), |i| a[i] * b[i])
 }
 
-fn axpy(y: &mut [Real], alpha: Real, x: &[Real]) {
+pub(crate) fn axpy(y: &mut [Real], alpha: Real, x: &[Real]) {
     if y.len() < PARALLEL_MIN {
         y.iter_mut().zip(x).for_each(|(yi, xi)| *yi += alpha * xi);
         return;

@@ -49,7 +49,6 @@ impl Gradient {
         let nb = &sim.neighbors;
         let contacts = &sim.contacts;
         let neumann = &sim.scratch.neumann;
-        let lattice_det = (1.0 / DIM).powi(2);
         let rows: Vec<(Vec<(u32, Vec2)>, Vec2)> = (0..x.len())
             .into_par_iter()
             .map(|i| {
@@ -73,10 +72,7 @@ impl Gradient {
                     moment += Mat2::new(xx, xy, xy, yy);
                 }
                 // GC, or the classic normalisation where the moments are degenerate
-                let mm = moment / n0;
-                let scale = (mm.determinant() > 0.3 * lattice_det)
-                    .then(|| mm.try_inverse())
-                    .flatten()
+                let scale = corrected_gradient_matrix(&moment, n0)
                     .map_or(Mat2::identity() * c_grad, |c| c / n0);
                 let row = raw.into_iter().map(|(j, g)| (j, scale * g)).collect();
                 (row, scale * linear)
