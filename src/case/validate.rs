@@ -436,8 +436,8 @@ fn non_negative(path: &str, v: f64, what: &str) -> Check {
     }
 }
 
-/// A share of n0 in (0, 1].
-fn share_of_n0(path: &str, v: f64, what: &str) -> Check {
+/// A share in (0, 1] (of n0, of an operator).
+fn share(path: &str, v: f64, what: &str) -> Check {
     if v > 0.0 && v <= 1.0 {
         Ok(())
     } else {
@@ -502,7 +502,7 @@ fn check_scalars(case: &Case) -> Check {
             "must be positive (got 0): 1 rebuilds the AMG hierarchy every step",
         );
     }
-    share_of_n0(
+    share(
         "scheme.surface_threshold",
         s.surface_threshold,
         "a fraction of n0, about 0.97 is usual",
@@ -522,7 +522,7 @@ fn check_scalars(case: &Case) -> Check {
         s.stabilization_distance,
         "a ratio of particle_spacing",
     )?;
-    share_of_n0(
+    share(
         "scheme.laplacian_fill_floor",
         s.laplacian_fill_floor,
         "a fraction of n0, 1 disables the renormalisation",
@@ -572,15 +572,11 @@ fn check_scalars(case: &Case) -> Check {
         );
     }
     if s.projection == Projection::Exact {
-        if !(s.exact_projection_blend > 0.0 && s.exact_projection_blend <= 1.0) {
-            return reject(
-                "scheme.exact_projection_blend",
-                format!(
-                    "must lie in (0, 1]: the share of the Laplacian kept in the exact rows (got {})",
-                    s.exact_projection_blend
-                ),
-            );
-        }
+        share(
+            "scheme.exact_projection_blend",
+            s.exact_projection_blend,
+            "the share of the Laplacian kept in the exact rows",
+        )?;
         if s.source == SourceKind::Pnd {
             return reject(
                 "scheme.projection",
