@@ -6,8 +6,8 @@
 //! the experiment reaches each simulated front position 0.29-0.33 later in T (mean
 //! 0.31) at every sample from T = 0.84 to 2.83, 17 ms at Martin & Moyce's a = 57 mm,
 //! the order of a gate's release. The delay converges with resolution: mean 0.262 /
-//! 0.281 / 0.310 / 0.317 at a/20 / a/30 / a/40 / a/60, spread at most 0.032 at each. references.md attributes the early times to the
-//! release. At T = 0.41 the two agree (1.10 against 1.11): water leaves under a rising
+//! 0.281 / 0.310 / 0.317 at a/20 / a/30 / a/40 / a/60, spread at most 0.032 at each.
+//! references.md attributes the early times to the release. At T = 0.41 the two agree (1.10 against 1.11): water leaves under a rising
 //! gate before the column falls. Neither a turbulent wall friction nor viscosity closes
 //! it without being fitted (session 9, closing note): a log-law wall shear on the first
 //! row changes the front by under 1 %; a uniform eddy viscosity brings it within 10 %

@@ -227,14 +227,16 @@ pub(super) fn correct_to_exact_projection<K: Kernel>(
         .iter()
         .map(|&i| s.exact_correction.get(i as usize).copied().unwrap_or(0.0))
         .collect();
-    let diag = s.matrix.diagonal();
+    // Jacobi where there is no hierarchy (other solvers), its diagonal taken once
+    let mut diag: Option<Vec<Real>> = None;
     let info = pressure::gmres(
         |v, out| residual(v, true, out),
         |r, z| {
             if !cache.precondition(&s.matrix, r, z) {
+                let diag = diag.get_or_insert_with(|| s.matrix.diagonal());
                 z.iter_mut()
                     .zip(r)
-                    .zip(&diag)
+                    .zip(diag.iter())
                     .for_each(|((zi, ri), di)| *zi = ri / di);
             }
         },
