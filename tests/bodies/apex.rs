@@ -59,9 +59,11 @@ fn flat_wall_z(d: Real, l0: Real, re: Real) -> Real {
 /// The scatter is the staircase of the other face: a smooth wall cannot follow it.
 ///
 /// The scene's own Cartesian lattice is not this reference: at t = 0 it drops the points
-/// within l0/2 of the surface, which on a 30° face leaves a gap of l0 on average instead
-/// of l0/2, and the particles near the apex start 14-26 % short (flagged free surface
-/// for the first steps). No shipped case starts a body submerged with inclined faces.
+/// within l0/2 of the surface. On a face along a lattice line that is the first row's
+/// place, but on a 30° face the points are spread evenly in distance, so a strip l0/2
+/// wide is left empty and the particles near the apex start 14-26 % short (flagged free
+/// surface for the first steps). No shipped case starts a body submerged with inclined
+/// faces.
 #[test]
 fn particle_near_wedge_apex_gets_full_lattice_number_density() {
     let l0 = 0.01;
