@@ -1,7 +1,6 @@
 //! From a case to the initial state: fluid particles on a square lattice of l0 inside
-//! the fluid blocks, half a spacing clear of every wall and body surface (so the
-//! virtual wall lattice continues the fluid lattice and n = n0 initially), and the
-//! wall objects with their solid regions.
+//! the fluid blocks, outside every solid and at least [`SURFACE_CLEARANCE`] from every
+//! wall and body surface, and the wall objects with their solid regions.
 
 use super::math::{cross, rotate, vec2, Real, Vec2};
 use super::params::MpsParameters;
@@ -10,6 +9,21 @@ use super::walls::geometry::{centroid, closest_on_segment, inside, WallShape};
 use super::walls::{WallObject, WallState};
 use crate::case::{Case, FluidSide, Motion};
 use std::collections::HashSet;
+
+/// Least distance, in spacings, from a lattice point kept as a fluid particle to a wall
+/// or body surface.
+///
+/// The virtual wall lattice puts its first row l0/2 behind the surface, so the fluid's
+/// first row belongs l0/2 in front of it. A face along a lattice line at a cell boundary
+/// has its first row there whatever the clearance below l0/2. Any other face (inclined,
+/// or off the lattice) meets the lattice at distances spread evenly over a spacing:
+/// keeping only points l0/2 clear put the first row at 0.5-1.5 l0, leaving a strip
+/// l0/2 wide empty on average, and its particles short of n0 read as free surface
+/// (p = 0) inside the water. A fixed box 0.37 l0 off the lattice then failed within
+/// 0.2 s of still water, and a submerged 30° wedge ran away from its apex. At 0.1 l0 both
+/// hold still water exactly (tests/bodies/hydrostatics.rs); a particle 0.1 l0 from the
+/// surface starts about 20 % above n0, which the first pressure solve pushes back.
+pub const SURFACE_CLEARANCE: Real = 0.1;
 
 pub struct Scene {
     pub particles: Particles,
@@ -128,7 +142,7 @@ pub fn build_scene(case: &Case, params: &MpsParameters) -> Scene {
             free_slip: false,
         });
     }
-    // 3. keep the candidates outside every solid and at least l0/2 from every surface
+    // 3. keep the candidates outside every solid and clear of every surface
     let placed: Vec<(Vec<[Vec2; 2]>, Vec<[Vec2; 2]>)> = walls
         .iter()
         .map(|w| {
@@ -136,7 +150,7 @@ pub fn build_scene(case: &Case, params: &MpsParameters) -> Scene {
             (s.surface.clone(), s.loop_edges())
         })
         .collect();
-    let clearance = 0.5 * l0 * (1.0 - 1e-6);
+    let clearance = SURFACE_CLEARANCE * l0;
     let (mut pos, mut vel) = (Vec::new(), Vec::new());
     'next: for (p, v) in candidates {
         for (surface, loops) in &placed {

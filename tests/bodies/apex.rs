@@ -58,12 +58,10 @@ fn flat_wall_z(d: Real, l0: Real, re: Real) -> Real {
 /// the right face: mean -0.34 %, rms 1.9 % (flat-wall table +2.6 %).
 /// The scatter is the staircase of the other face: a smooth wall cannot follow it.
 ///
-/// The scene's own Cartesian lattice is not this reference: at t = 0 it drops the points
-/// within l0/2 of the surface. On a face along a lattice line that is the first row's
-/// place, but on a 30° face the points are spread evenly in distance, so a strip l0/2
-/// wide is left empty and the particles near the apex start 14-26 % short (flagged free
-/// surface for the first steps). No shipped case starts a body submerged with inclined
-/// faces.
+/// The scene's own square lattice is not this reference: it meets both faces in a
+/// staircase, and the particles within reach of a submerged wedge start between 0.84
+/// and 1.20 n0 (`scene::SURFACE_CLEARANCE`); the buoyancy of a submerged wedge is what shows that
+/// start to be harmless (tests/bodies/hydrostatics.rs).
 #[test]
 fn particle_near_wedge_apex_gets_full_lattice_number_density() {
     let l0 = 0.01;
