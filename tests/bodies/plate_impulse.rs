@@ -57,8 +57,10 @@ fn plate_start(l0: f64, kinematics: &str, c: f64, extra: &[String]) -> Start {
             m = -c
         ),
         // centred on the lattice's mirror line, as measured (the wedge case shifts its
-        // body 1.1 mm off it)
+        // body 1.1 mm off it), with the default scheme's radius (the wedge case's 2.5
+        // carries 1.104 / 1.111 at 10 / 5 mm with the default projection)
         "bodies.0.position=[0.0, 0.0]".into(),
+        "scheme.radius=2.1".into(),
         format!("bodies.0.motion.velocity=[0.0, {}]", -V),
         format!("time.max_dt={DT}"),
         format!("scheme.wall_kinematics=\"{kinematics}\""),

@@ -244,31 +244,32 @@ impl PressureProfile {
     }
 }
 
-/// The default job at its own spacing (5 mm, 192 000 particles, about 165 s on two
-/// cores): C_F within the 10 % of the similarity solution, and the pressure
-/// along the faces, averaged over the window, within 25 % of its peak (6.927) and of
-/// its table. One run is one draw of a force that swings by ±50 % over a millisecond
-/// (runs that differ only in round-off part after 4 ms): the ensembles of
-/// `wedge_force_coefficient_converges_with_spacing` measure the spread, ±0.1-0.4 at 5 mm.
+/// The default job at its own spacing (4 mm, r_e = 2.5 l0, 300 000 particles, about 7
+/// minutes on two cores): C_F within the 10 % of the similarity solution, and the
+/// pressure along the faces, averaged over the window, within 25 % of its peak (6.927)
+/// and of its table. One run is one draw of a force that swings by ±35 % over a
+/// millisecond: the ensembles of `wedge_force_coefficient_converges_with_spacing`
+/// measure the spread.
 ///
-/// Measured in the 4 m x 1.2 m tank with the shipped wedge 1.1 mm off the lattice's
-/// mirror line (session 10): C_F = 14.93 ± 0.41 (+6.3 %), per-step scatter 0.55 of the
-/// mean; peak Cp 5.63 at z/(Vt) = 0.40 (-18.7 %); the profile +8-9 % on the lower face
-/// (4.94 against 4.59 at the keel) and -14 % at 0.3. At shifts of l0/8, l0/4 and 3 l0/8:
-/// 14.66 / 14.89 / 14.75 (+4.4 / +6.0 / +5.0 %), peak Cp 5.53 / 5.83 / 5.97.
+/// Measured (session 11): C_F = 13.39 ± 0.22 (-4.6 %), per-step scatter 0.36 of the
+/// mean; peak Cp 5.60 at z/(Vt) = 0.45 (-19.2 %); the profile within 4 % of the table on
+/// the lower face (4.40 / 4.53 / 4.59 / 4.83 at z/(Vt) = -1 / -0.75 / -0.5 / -0.25) and
+/// -5 / -7 / -9 / -15 % at 0 / 0.1 / 0.2 / 0.3.
+/// Sessions 1-10 shipped 5 mm with the default r_e = 2.1 l0: 14.93 ± 0.41 (+6.3 %), peak
+/// Cp 5.63, the lower face +8-9 %; but that error grows with refinement (+11.5 % at
+/// 2.5 mm), where with 2.5 l0 it falls (see the convergence test).
 ///
 /// Until session 9 the case put the wedge's axis halfway between two particle columns,
-/// the mirror-symmetric arrangement, which runs high: 16.41 ± 0.70 (+16.9 %). The two
-/// faces' particles stay mirror images until round-off breaks the symmetry (Fx/Fy about
-/// 1e-6, then 1e-2-1e-1 within a step: at 7.5 ms with the wedge 1e-7 m off the axis,
-/// 3.5 ms at 1e-5 m), and while they do, the faces' pressure noise adds coherently
-/// (per-step scatter 0.97 of the mean against 0.56-0.62 at 1 cm) and the face's Cp is
-/// higher in every band (+10-12 % on the lower face, up to +41 % at z/(Vt) = 0.3-0.45;
-/// the first row holds on to the face above the spray root: 1.6 particles per step at
-/// z/(Vt) = 0.75-1 against 0.1; `examples/wedge_face`, 0.3-0.8 t_chine). At 1 cm: 16.75
-/// symmetric, 16.51 at 1e-7 m, 13.59 at 1e-5 m, 14.02 at 1 mm, 14.09 at l0/32. The
-/// shift of 1.1 mm keeps the case off the mirror line at the usual spacings (0.11, 0.14,
-/// 0.18, 0.22 and 0.44 l0 at 10, 8, 6.25, 5 and 2.5 mm).
+/// the mirror-symmetric arrangement, which runs high (16.41 ± 0.70 at 5 mm with 2.1 l0,
+/// +16.9 %). The two faces' particles stay mirror images until round-off breaks the
+/// symmetry (Fx/Fy about 1e-6, then 1e-2-1e-1 within a step: at 7.5 ms with the wedge
+/// 1e-7 m off the axis, 3.5 ms at 1e-5 m), and while they do, the faces' pressure noise
+/// adds coherently (per-step scatter 0.97 of the mean against 0.56-0.62 at 1 cm) and the
+/// face's Cp is higher in every band (+10-12 % on the lower face, up to +41 % at z/(Vt) =
+/// 0.3-0.45; `examples/wedge_face`). At 1 cm: 16.75 symmetric, 16.51 at 1e-7 m, 13.59 at
+/// 1e-5 m, 14.02 at 1 mm, 14.09 at l0/32. The shift of 1.1 mm keeps the case off the
+/// mirror line at the usual spacings (0.11, 0.14, 0.18, 0.22, 0.275 and 0.44 l0 at 10,
+/// 8, 6.25, 5, 4 and 2.5 mm).
 #[test]
 fn wedge_force_and_pressure_at_default_spacing() {
     let fit = wedge_fit(&[]);
@@ -294,16 +295,17 @@ fn wedge_force_and_pressure_at_default_spacing() {
 }
 
 /// C_F averaged over `members` runs with the wedge shifted across the lattice by
-/// k l0 / (2 members) (k = 0..members): each run is an independent draw of the per-step
-/// force noise, so the ensemble's standard error is the spread of the members over
-/// sqrt(members). Returns (mean, standard error, members' values).
-/// The shifts stay below l0/2: the wedge is symmetric, so a shift s and l0 - s are
-/// mirror images of one run (until session 8 the shifts spanned 0..l0 and the members
-/// at l0/4 and 3 l0/4 of an ensemble of four were the same run: 14.732 twice at 1 cm).
+/// (k + 1/2) l0 / (2 members) (k = 0..members): each run is an independent draw of the
+/// per-step force noise, so the ensemble's standard error is the spread of the members
+/// over sqrt(members). Returns (mean, standard error, members' values).
+/// The shifts stay strictly between 0 and l0/2: the wedge is symmetric, so a shift s and
+/// l0 - s are mirror images of one run, and at 0 and l0/2 its axis lies on a mirror line
+/// of the lattice, where the run reads 10-17 % high (see
+/// `wedge_force_and_pressure_at_default_spacing`).
 pub fn wedge_ensemble(l0: f64, members: usize, extra: &[String]) -> (f64, f64, Vec<f64>) {
     let values: Vec<f64> = (0..members)
         .map(|k| {
-            let shift = 0.5 * l0 * k as f64 / members as f64;
+            let shift = 0.5 * l0 * (k as f64 + 0.5) / members as f64;
             let mut o = vec![
                 format!("particle_spacing={l0}"),
                 format!("bodies.0.position=[{shift},0.0]"),
@@ -322,59 +324,59 @@ pub fn wedge_ensemble(l0: f64, members: usize, extra: &[String]) -> (f64, f64, V
     (mean, spread / n.sqrt(), values)
 }
 
-/// Spacings that divide the tank (4 m x 1.2 m of water) into whole rows and columns, each
-/// an ensemble of `WEDGE_ENSEMBLE` (4) lattice offsets.
+/// The error falls across three spacings that divide the tank (4 m x 1.2 m of water)
+/// into whole rows and columns, 10 / 4 / 2.5 mm, each an ensemble of lattice offsets
+/// (`WEDGE_ENSEMBLE` members, by default 8 / 4 / 2: the per-step noise is largest, and a
+/// run cheapest, at the coarsest spacing).
 ///
-/// Session 9, mirror-free offsets (k l0/16 and k l0/8): 14.62 ± 0.45 (8 members) /
-/// 14.38 ± 0.24 (8) / 15.18 ± 0.42 (4) at 10 / 8 / 5 mm, +4.1 / +2.4 / +8.1 %. Each
-/// ensemble holds one mirror-symmetric member (offset 0: 16.75 / 13.04 / 16.41, see
-/// `wedge_force_and_pressure_at_default_spacing`); the others alone read 14.31 ± 0.39 /
-/// 14.57 ± 0.17 / 14.76 ± 0.07, +1.9 ± 2.8 / +3.8 ± 1.2 / +5.2 ± 0.5 %: if anything the
-/// error grows with refinement (10 to 5 mm alone is +3.3 ± 2.8 %), and two runs at
-/// 2.5 mm (shifts l0/8 and l0/4, 768 000 particles, 24-32 minutes each) resolve it:
-/// 15.39 ± 0.23 and 15.91 ± 0.23 (+11.5 ± 1.9 %), the two-parameter fits agreeing
-/// (15.36 and 17.04, t0 -0.015 and 0.57 ms), peak Cp 6.52 and 6.74 at z/(Vt) = 0.40
-/// and 0.425 (-4.3 % on average), the lower face +8-13 %. The wedge follows the impulsively
-/// started plate with the default wall kinematics (tests/bodies/plate_impulse.rs: +7.8 /
-/// +9.9 / +11.6 / +12.9 % at 10 / 5 / 2.5 / 1.25 mm): the error converges to that
-/// added-mass excess, not to zero. The match is not a shared cause (session 10):
-/// `projection = "exact"` removes the plate's excess (0.988 / 0.995 / 1.001 at a blend
-/// of 0.05) but not the wedge's: seven offsets at 1 cm read 14.03 ± 0.68, and two at
-/// 5 mm 15.77 and 18.16 (l0/8 and l0/4, where the default reads 14.66 and 14.89), the
-/// lower face still +8-16 %, the per-step scatter 0.9-1.2 of the mean. With
-/// `wall_kinematics = "neumann"` (the plate within 1-4 %) two runs off the mirror line
-/// at 5 mm read 12.85 / 12.57 (-8.5 / -10.5 %): the lower face within 1-3 %, the peak
-/// region 20-30 % low.
+/// With the shipped case's r_e = 2.5 l0 (session 11), runs off the mirror line:
+/// - 10 mm, seven offsets k l0/16: 12.46, 13.77, 13.19, 13.10, 12.76, 13.04, 13.17, so
+///   13.07 ± 0.15 (-6.9 %), peak Cp 4.58-4.89 (-31 %);
+/// - 8 mm, three offsets k l0/8: 12.18, 13.31, 12.80 (12.77 ± 0.33, -9.1 %);
+/// - 5 mm, offsets l0/8, l0/4, 3 l0/8: 13.275, 13.259, 13.285 (13.27 ± 0.01, -5.5 %),
+///   peak Cp 5.13-5.18 (-25 %), the lower face within 3 % of the table;
+/// - 4 mm, the shipped case: 13.39 ± 0.22 (-4.6 %), peak Cp 5.60 (-19.2 %);
+/// - 2.5 mm (768 000 particles, 47 minutes): offset l0/8 13.87 ± 0.15 (-1.2 %), peak Cp
+///   5.84 at z/(Vt) = 0.35 (-15.7 %), the lower face +2.6-2.9 %, per-step scatter 0.31.
 ///
-/// Where the excess comes from (session 6, the window-averaged pressure profile printed
-/// by `wedge_fit`): the lower face reads Cp 5.0-5.2 against the table's 4.54-4.62 at 5 mm
-/// (+6-11 % at 10 mm), while the peak is 12 % low; the profile integrates to the measured
-/// C_F (15.27 against 15.37 from the loads). Unchanged with CFL 0.05, without clipping
-/// negative pressures, without collisions; ghosts and the surface offset are inert with
-/// g = 0. `scheme.radius = 2.5` brings the lower face within 1-3 % of the table at 5 mm
-/// (C_F 13.73, 13.05 and 13.25 at 5, 6.25 and 8 mm, one offset each) but breaks the run at
-/// 10 mm (C_F 10.4); 3.1 gives 14.66 / 14.97 at 10 / 5 mm, 2.7 gives 12.92 / 13.36, and
-/// 2.3 (which adds the √5 lattice shell to 2.1's twelve neighbours) 13.22 / 14.02, the
-/// lower face within 1-4 % of the table at 5 mm but the peak Cp 5.18 at 10 mm (-25 %).
-/// Session 10, radius 2.5 off the mirror line at 5 mm (offsets l0/8, l0/4, 3 l0/8):
-/// 13.275 / 13.259 / 13.285 (-5.5 %; radius 2.1: 14.76 ± 0.07), the lower face within
-/// 3 %, the peak Cp 5.13-5.18 (-25 %), per-step scatter 0.35-0.46; 2.5 mm is untried.
+/// With the default r_e = 2.1 l0 the same ensembles rise with refinement: 14.31 ± 0.39 /
+/// 14.57 ± 0.17 / 14.76 ± 0.07 at 10 / 8 / 5 mm and two runs at 2.5 mm 15.39 and 15.91
+/// (+1.9 / +3.8 / +5.2 / +11.5 %), with peak Cp 5.26 / - / 5.63 / 6.52-6.74 and the lower
+/// face 8-13 % above the table at 5 and 2.5 mm. The difference is the support of the
+/// number density, gradient and source (`scheme.radius`), not of the Laplacian: at 1 cm,
+/// `laplacian_radius = 2.5` alone reads 14.42 (three offsets), `radius = 2.5` with
+/// `laplacian_radius = 2.1` 12.65. r_e = 2.3 l0 reads like 2.1 (15.03 at 5 mm, the lower
+/// face +4-10 %): on the lattice it adds the √5 shell of neighbours with a weight of 0.03,
+/// against 0.12 at 2.5. Other things tried with 2.1 (sessions 6-10): CFL 0.05, no
+/// clipping of negative pressures, no collisions, `wall_kinematics = "neumann"` (12.85 /
+/// 12.57 at 5 mm, the peak region 20-30 % low) and `projection = "exact"` (14.03 ± 0.68
+/// at 1 cm, 15.77 / 18.16 at 5 mm; with radius 2.5, 13.69 at 1 cm and 12.94 at 5 mm, the
+/// lower face 10-12 % low).
+///
 /// `WEDGE_SPACINGS=0.01,0.008` and `WEDGE_SET="scheme.x=y ..."` rerun it for diagnosis.
 #[test]
-#[ignore = "fails: ensembles of mirror-free offsets read 14.62 ± 0.45 (8) / 14.38 ± 0.24 (8) / 15.18 ± 0.42 (4) at 10 / 8 / 5 mm (+4.1 / +2.4 / +8.1 %): all within 10 %, but the error does not fall with refinement (without the symmetric member +1.9 / +3.8 / +5.2 %); about 15 minutes on two cores"]
+#[ignore = "about 2 hours on two cores (two runs of 47 minutes at 2.5 mm); measured in session 11: 13.07 ± 0.15 / 13.39 ± 0.22 / 13.87 ± 0.15 at 10 / 4 / 2.5 mm (-6.9 / -4.6 / -1.2 %)"]
 fn wedge_force_coefficient_converges_with_spacing() {
     let spacings: Vec<f64> = std::env::var("WEDGE_SPACINGS")
         .map(|v| v.split(',').map(|x| x.parse().unwrap()).collect())
-        .unwrap_or(vec![0.01, 0.008, 0.005]);
+        .unwrap_or(vec![0.01, 0.004, 0.0025]);
     let extra: Vec<String> = std::env::var("WEDGE_SET")
         .map(|v| v.split(' ').map(String::from).collect())
         .unwrap_or_default();
-    let members: usize = std::env::var("WEDGE_ENSEMBLE")
-        .map(|v| v.parse().unwrap())
-        .unwrap_or(4);
+    let members = |l0: f64| -> usize {
+        std::env::var("WEDGE_ENSEMBLE")
+            .map(|v| v.parse().unwrap())
+            .unwrap_or(if l0 >= 0.01 {
+                8
+            } else if l0 >= 0.004 {
+                4
+            } else {
+                2
+            })
+    };
     let ensembles: Vec<(f64, f64, Vec<f64>)> = spacings
         .iter()
-        .map(|&l0| wedge_ensemble(l0, members, &extra))
+        .map(|&l0| wedge_ensemble(l0, members(l0), &extra))
         .collect();
     for (l0, (c, se, values)) in spacings.iter().zip(&ensembles) {
         println!("l0 = {l0}: C_F = {c:.3} ± {se:.3} from {values:.3?}");
@@ -396,12 +398,11 @@ fn wedge_force_coefficient_converges_with_spacing() {
 /// (23.26) bounds. Linear growth is checked on the impulse, whose origin the per-step
 /// scatter does not move much. The pressure is asserted at the default spacing
 /// (`wedge_force_and_pressure_at_default_spacing`): at 1 cm the peak is resolved by two
-/// or three particles and reads about 25 % low off the mirror line.
-/// Measured in the 4 m x 1.2 m tank, the wedge 1.1 mm off the mirror line: C_F = 14.08 ±
-/// 0.58, impulse origin -0.20 ms (t_chine = 14.9 ms); peak Cp 5.26 at z/(Vt) = 0.125
-/// (-24 %), the lower face +2-10 %; 48 000 particles, 19 s alone.
-/// In the mirror-symmetric arrangement of sessions 1-9: C_F = 16.75 ± 1.30, peak Cp
-/// 6.41 (-7.5 %); 1 mm off the line the peak read 5.21 (-24.8 %).
+/// or three particles.
+/// Measured with the shipped case (r_e = 2.5 l0, the wedge 1.1 mm off the mirror line):
+/// C_F = 12.82 ± 0.60 (-8.7 %), impulse origin -0.51 ms (t_chine = 14.9 ms); peak Cp
+/// 4.81 at z/(Vt) = 0.35 (-31 %), the lower face within 3 %; 48 000 particles, 31 s.
+/// With r_e = 2.1 l0 (sessions 1-10): 14.08 ± 0.58, peak Cp 5.26 (-24 %).
 #[test]
 fn wedge_force_grows_linearly_at_one_centimetre() {
     let fit = wedge_fit(&["particle_spacing=0.01".into()]);
