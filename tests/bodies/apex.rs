@@ -5,6 +5,7 @@
 //! larger deficit would flag an interior particle as free surface.
 
 use crate::common::*;
+use mpsfsi::case::Case;
 use mpsfsi::engine::kernel::{Kernel, Koshizuka};
 use mpsfsi::engine::math::{Real, Vec2};
 use mpsfsi::engine::walls::geometry::inside;
@@ -42,6 +43,24 @@ fn flat_wall_z(d: Real, l0: Real, re: Real) -> Real {
     z
 }
 
+/// The scene of `case`, its (first) body placed, and the wall sums' radii and weights.
+fn held_body(case: &Case) -> (Simulation, PlacedWall, WallKernels, Weights) {
+    let sim = Simulation::new(case);
+    let prm = &sim.params;
+    let k = sim.walls.iter().position(|w| w.body.is_some()).unwrap();
+    let placed = PlacedWall::new(&sim.walls[k], sim.walls[k].state);
+    let kernels = WallKernels {
+        l0: case.particle_spacing,
+        re: prm.re,
+        re_lap: prm.re_lap,
+    };
+    let weights = Weights {
+        re: prm.re,
+        re_lap: prm.re_lap,
+    };
+    (sim, placed, kernels, weights)
+}
+
 /// A 120° apex (the 30° deadrise wedge) has no lattice that continues both faces: a
 /// full lattice aligned with one face meets the other in a staircase, so the number
 /// density a particle there gets from it depends on where the lattice's columns fall.
@@ -60,8 +79,8 @@ fn flat_wall_z(d: Real, l0: Real, re: Real) -> Real {
 ///
 /// The scene's own square lattice is not this reference: it meets both faces in a
 /// staircase, and the particles within reach of a submerged wedge start between 0.84
-/// and 1.20 n0 (`scene::SURFACE_CLEARANCE`); the buoyancy of a submerged wedge is what shows that
-/// start to be harmless (tests/bodies/hydrostatics.rs).
+/// and 1.20 n0 (`scene::SURFACE_CLEARANCE`); the buoyancy of a submerged wedge is what
+/// shows that start to be harmless (tests/bodies/hydrostatics.rs).
 #[test]
 fn particle_near_wedge_apex_gets_full_lattice_number_density() {
     let l0 = 0.01;
@@ -73,20 +92,9 @@ fn particle_near_wedge_apex_gets_full_lattice_number_density() {
             r#"bodies.0.motion={"type": "prescribed", "velocity": [0.0, 0.0]}"#.into(),
         ],
     );
-    let sim = Simulation::new(&case);
+    let (sim, placed, kernels, weights) = held_body(&case);
     let prm = &sim.params;
-    let k = sim.walls.iter().position(|w| w.body.is_some()).unwrap();
-    let placed = PlacedWall::new(&sim.walls[k], sim.walls[k].state);
-    let kernels = WallKernels {
-        l0,
-        re: prm.re,
-        re_lap: prm.re_lap,
-    };
-    let weights = Weights {
-        re: prm.re,
-        re_lap: prm.re_lap,
-    };
-    let apex = sim.walls[k].state.position;
+    let apex = placed.state.position;
     let edges = &placed.loop_edges;
     // the right face leaves the apex at 30° (deadrise); its outward normal points down-right
     let deadrise = Real::to_radians(30.0);
@@ -165,19 +173,8 @@ fn particle_near_convex_box_corner_gets_full_lattice_number_density() {
             r#"bodies.0.motion={"type": "prescribed", "velocity": [0.0, 0.0]}"#.into(),
         ],
     );
-    let sim = Simulation::new(&case);
+    let (sim, placed, kernels, weights) = held_body(&case);
     let prm = &sim.params;
-    let k = sim.walls.iter().position(|w| w.body.is_some()).unwrap();
-    let placed = PlacedWall::new(&sim.walls[k], sim.walls[k].state);
-    let kernels = WallKernels {
-        l0,
-        re: prm.re,
-        re_lap: prm.re_lap,
-    };
-    let weights = Weights {
-        re: prm.re,
-        re_lap: prm.re_lap,
-    };
     let corner = Vec2::new(-0.2, -0.35);
     let x = &sim.particles.position;
     let (mut worst, mut worst_flat, mut checked) = (0.0_f64, 0.0_f64, 0);
