@@ -336,9 +336,9 @@ pub fn wedge_ensemble(l0: f64, members: usize, extra: &[String]) -> (f64, f64, V
 /// - 5 mm, offsets l0/8, l0/4, 3 l0/8: 13.275, 13.259, 13.285 (13.27 ± 0.01, -5.5 %),
 ///   peak Cp 5.13-5.18 (-25 %), the lower face within 3 % of the table;
 /// - 4 mm, the shipped case: 13.39 ± 0.22 (-4.6 %), peak Cp 5.60 (-19.2 %);
-/// - 2.5 mm (768 000 particles, 47 minutes alone): offsets l0/8 and l0/4 13.87 and 14.00
-///   (13.94 ± 0.07, -0.7 %), peak Cp 5.84 and 6.03 at z/(Vt) = 0.35-0.375 (-14.3 % on
-///   average), the lower face +2-3 %, per-step scatter 0.31.
+/// - 2.5 mm (768 000 particles, 47-68 minutes a run on a shared machine): offsets l0/8
+///   and l0/4 13.87 and 14.00 (13.94 ± 0.07, -0.7 %), peak Cp 5.84 and 6.03 at z/(Vt) =
+///   0.35-0.375 (-14.3 % on average), the lower face +2-3 %, per-step scatter 0.31.
 ///
 /// With the default r_e = 2.1 l0 the same ensembles rise with refinement: 14.31 ± 0.39 /
 /// 14.57 ± 0.17 / 14.76 ± 0.07 at 10 / 8 / 5 mm and two runs at 2.5 mm 15.39 and 15.91
@@ -356,7 +356,7 @@ pub fn wedge_ensemble(l0: f64, members: usize, extra: &[String]) -> (f64, f64, V
 ///
 /// `WEDGE_SPACINGS=0.01,0.008` and `WEDGE_SET="scheme.x=y ..."` rerun it for diagnosis.
 #[test]
-#[ignore = "about 2 hours on two cores (two runs of 47 minutes at 2.5 mm); measured in session 11: 13.07 ± 0.15 / 13.39 ± 0.22 / 13.94 ± 0.07 at 10 / 4 / 2.5 mm (-6.9 / -4.6 / -0.7 %)"]
+#[ignore = "about 2 hours on two cores (two runs of 47-68 minutes at 2.5 mm); measured in session 11: 13.07 ± 0.15 / 13.39 ± 0.22 / 13.94 ± 0.07 at 10 / 4 / 2.5 mm (-6.9 / -4.6 / -0.7 %)"]
 fn wedge_force_coefficient_converges_with_spacing() {
     let spacings: Vec<f64> = std::env::var("WEDGE_SPACINGS")
         .map(|v| v.split(',').map(|x| x.parse().unwrap()).collect())
