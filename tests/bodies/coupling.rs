@@ -85,6 +85,41 @@ fn csv_rows(path: &std::path::Path, name: &str) -> Vec<Vec<f64>> {
         .collect()
 }
 
+/// The shipped free-fall wedge run once at 1 cm through `run_case`, shared by the tests
+/// that read its run directory: loads.csv and bodies.csv rows for the wedge.
+struct FreeFallRun {
+    case: mpsfsi::case::Case,
+    loads: Vec<Vec<f64>>,  // time, fx, fy, mz
+    bodies: Vec<Vec<f64>>, // time, x, y, angle, vx, vy, omega
+}
+
+fn free_fall_run() -> &'static FreeFallRun {
+    static RUN: std::sync::OnceLock<FreeFallRun> = std::sync::OnceLock::new();
+    RUN.get_or_init(|| {
+        let case = shipped("wedge_free_fall.json", &["particle_spacing=0.01".into()]);
+        let dir =
+            std::env::temp_dir().join(format!("mpsfsi-bodies-free-fall-{}", std::process::id()));
+        let clock = std::time::Instant::now();
+        let summary = mpsfsi::run::run_case(&case, &dir, &mut mpsfsi::run::Quiet)
+            .expect("run failed to write");
+        assert!(summary.reason.is_none(), "{:?}", summary.reason);
+        let loads = csv_rows(&dir.join("loads.csv"), "wedge");
+        let bodies = csv_rows(&dir.join("bodies.csv"), "wedge");
+        println!(
+            "free fall (l0 = 0.01): {} samples in {:.1} s, max particle speed {:.1} m/s",
+            bodies.len(),
+            clock.elapsed().as_secs_f64(),
+            summary.max_velocity
+        );
+        let _ = std::fs::remove_dir_all(&dir);
+        FreeFallRun {
+            case,
+            loads,
+            bodies,
+        }
+    })
+}
+
 /// The free-fall wedge obeys M dv/dt = F + M g with the loads it reports: in the run
 /// directory written by `run_case`, the vertical velocity of bodies.csv equals
 /// v_y0 + ∫ (g_y + F_y / M) dt from loads.csv (interval means, so the integral is
@@ -93,31 +128,26 @@ fn csv_rows(path: &std::path::Path, name: &str) -> Vec<Vec<f64>> {
 #[test]
 fn free_fall_wedge_velocity_matches_its_own_loads() {
     let mass = 241.0;
-    let case = shipped("wedge_free_fall.json", &["particle_spacing=0.01".into()]);
-    let dir = std::env::temp_dir().join(format!("mpsfsi-bodies-free-fall-{}", std::process::id()));
-    let clock = std::time::Instant::now();
-    let summary =
-        mpsfsi::run::run_case(&case, &dir, &mut mpsfsi::run::Quiet).expect("run failed to write");
-    assert!(summary.reason.is_none(), "{:?}", summary.reason);
-    let loads = csv_rows(&dir.join("loads.csv"), "wedge"); // time, fx, fy, mz
-    let bodies = csv_rows(&dir.join("bodies.csv"), "wedge"); // time, x, y, angle, vx, vy, omega
+    let FreeFallRun {
+        case,
+        loads,
+        bodies,
+    } = free_fall_run();
     assert_eq!(loads.len(), bodies.len());
     assert!(loads.len() > 100, "too few samples: {}", loads.len());
     let g = case.fluid.gravity[1];
     let v0 = case.bodies[0].motion_velocity_y();
     let (mut v, mut t_prev, mut worst) = (v0, 0.0, 0.0_f64);
-    for (l, b) in loads.iter().zip(&bodies) {
+    for (l, b) in loads.iter().zip(bodies) {
         assert!((l[0] - b[0]).abs() < 1e-12);
         v += (g + l[2] / mass) * (l[0] - t_prev);
         t_prev = l[0];
         worst = worst.max((b[5] - v).abs() / v.abs());
     }
     println!(
-        "free fall (l0 = 0.01): {} samples, worst |v - (v0 + ∫(g + F/M) dt)| / |v| = {:.3e}, final v_y {:.4} m/s, {:.1} s",
-        bodies.len(),
+        "free fall: worst |v - (v0 + ∫(g + F/M) dt)| / |v| = {:.3e}, final v_y {:.4} m/s",
         worst,
         bodies.last().unwrap()[5],
-        clock.elapsed().as_secs_f64()
     );
     assert!(worst < 0.005, "coupling inconsistency {worst:.3e}");
     // monotone deceleration once the entry force clearly exceeds the weight: from the
@@ -157,7 +187,68 @@ fn free_fall_wedge_velocity_matches_its_own_loads() {
         -bodies.last().unwrap()[5] < speed0,
         "the wedge did not slow down"
     );
-    let _ = std::fs::remove_dir_all(&dir);
+}
+
+/// The free-fall wedge loses speed as the momentum balance of the similarity solution
+/// says. Wagner's model writes the entry force as F = d(m_a V)/dt with an added mass
+/// that depends on the penetration h only; calibrated to the similarity solution
+/// (references.md), m_a(h) = C_F rho h² / 2, so that F = C_F rho V³ t at constant speed.
+/// With M dV/dt = M g - F (downward positive) the body's momentum obeys
+/// (M + m_a(h)) V = M (V0 + g t), dh/dt = V: a reference for the velocity loss
+/// V0 - V(t) that the run does not feed on. Compared at every sample while the jet root
+/// is below the chines (0.6-0.9 t_chine): the mean within 10 %, each sample within 20 %
+/// (the force comes in bursts as the wedge meets each lattice row). The model takes the
+/// acceleration part of the force (m_a dV/dt, about 12 % of it at 0.8 t_chine) from the
+/// same added mass, which is Wagner's assumption, not the similarity solution's, and
+/// the 1 cm run's C_F itself carries several per cent.
+/// Measured (session 12, CFL 0.1, every sample of 0.6-0.9 t_chine), mean and worst:
+/// at 1 cm with the wedge 0 / 1.1 (shipped) / 2.5 / 4 mm off the axis +6.5 / +0.6 /
+/// +2.0 / +4.0 % and +15.9 / +5.1 / +7.0 / +10.6 %. With the CFL 0.2 the case had
+/// before, a jet-root particle thrown out at 50-150 m/s took the water off the face for
+/// several milliseconds: at 1 cm (offset 3.1 mm) +17.6 % and +41 %, at the shipped 5 mm
+/// -37.2 % and -48.5 %.
+#[test]
+fn free_fall_wedge_slows_like_the_momentum_model() {
+    let FreeFallRun { case, bodies, .. } = free_fall_run();
+    let (mass, g) = (241.0, -case.fluid.gravity[1]);
+    let v0 = -case.bodies[0].motion_velocity_y();
+    let (c_f, t_chine) = (14.04, 0.0149);
+    // the model, integrated with a step far below the run's
+    let model_speed = |t_end: f64| -> f64 {
+        let (dt, mut t, mut h, mut v) = (1e-7, 0.0, 0.0, v0);
+        while t < t_end {
+            h += v * dt;
+            t += dt;
+            v = mass * (v0 + g * t) / (mass + 0.5 * c_f * RHO * h * h);
+        }
+        v
+    };
+    // every sample while the jet root is below the chines
+    let errors: Vec<(f64, f64)> = bodies
+        .iter()
+        .filter(|b| b[0] >= 0.6 * t_chine && b[0] <= 0.9 * t_chine)
+        .map(|b| (b[0], (v0 + b[5]) / (v0 - model_speed(b[0])) - 1.0))
+        .collect();
+    let mean = errors.iter().map(|e| e.1).sum::<f64>() / errors.len() as f64;
+    let (t_worst, worst) = errors
+        .iter()
+        .copied()
+        .max_by(|a, b| a.1.abs().total_cmp(&b.1.abs()))
+        .unwrap();
+    println!(
+        "free fall: velocity loss against the momentum model over 0.6-0.9 t_chine ({} samples): mean {:+.2} %, worst {:+.2} % at {:.2} ms",
+        errors.len(),
+        100.0 * mean,
+        100.0 * worst,
+        1e3 * t_worst
+    );
+    assert!(errors.len() >= 30, "too few samples: {}", errors.len());
+    assert!(mean.abs() < 0.10, "mean error {mean:+.3}");
+    assert!(
+        worst.abs() < 0.20,
+        "error {worst:+.3} at {:.2} ms",
+        1e3 * t_worst
+    );
 }
 
 trait MotionVelocity {
