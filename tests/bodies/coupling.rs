@@ -446,3 +446,65 @@ fn free_body_lands_on_a_fixed_wall() {
         "box not at rest on the shelf: {last:?}"
     );
 }
+
+/// Body–body contact goes through rapier too: a free box dropped in air onto another
+/// free box that rests on the shelf comes to rest on top of it, and the lower box stays
+/// where it was (both boxes 40 kg/m; x and rotation locked).
+#[test]
+fn free_body_lands_on_another_body() {
+    let body = |name: &str, half_width: f64, y: f64| {
+        format!(
+            r#"{{"name": "{name}", "polygon": [[{a}, 0.0], [{half_width}, 0.0], [{half_width}, 0.2], [{a}, 0.2]], "position": [0.0, {y}], "angle": 0.0, "motion": {{"type": "free", "mass": 40.0, "velocity": [0.0, 0.0], "angular_velocity": 0.0, "locked": ["x", "rotation"]}}}}"#,
+            a = -half_width
+        )
+    };
+    let case = shipped(
+        "floating_box.json",
+        &[
+            r#"fluid_blocks=[{"polygon": [[-1.0, -0.5], [-0.9, -0.5], [-0.9, -0.4], [-1.0, -0.4]]}]"#.into(),
+            r#"walls=[{"name": "tank", "polyline": [[-1.0, 0.8], [-1.0, -0.5], [1.0, -0.5], [1.0, 0.8]]}, {"name": "shelf", "polyline": [[-0.5, 0.1], [0.5, 0.1]]}]"#.into(),
+            r#"domain={"min": [-1.05, -0.55], "max": [1.05, 1.0]}"#.into(),
+            format!("bodies=[{}, {}]", body("base", 0.2, 0.1), body("top", 0.1, 0.4)),
+        ],
+    );
+    let trace = run(&case, CouplingOptions::default(), Some(0.6), |_| {});
+    assert!(trace.error.is_none(), "{:?}", trace.error);
+    let (base, top) = (&trace.initial[0], &trace.initial[1]);
+    let (base_y0, top_y0) = (base.y, top.y);
+    let last = trace.steps.last().unwrap();
+    let (base_end, top_end) = (&last.bodies[0], &last.bodies[1]);
+    // the boxes' centroids are 0.1 above their bottoms; at rest the top box's bottom
+    // lies on the base's top, 0.2 above the base's bottom
+    let gap_end = (top_end.y - 0.1) - (base_end.y + 0.1);
+    let lowest_gap = trace
+        .steps
+        .iter()
+        .map(|s| (s.bodies[1].y - 0.1) - (s.bodies[0].y + 0.1))
+        .fold(f64::INFINITY, f64::min);
+    println!(
+        "box on box: base moved {:.2e} m, top fell {:.4} m, gap at the end {gap_end:.2e} m (lowest {lowest_gap:.2e}), v_y {:.2e} / {:.2e} m/s",
+        base_end.y - base_y0,
+        top_y0 - top_end.y,
+        base_end.vy,
+        top_end.vy
+    );
+    // the top box falls 0.1 m (0.14 s), then rests: no interpenetration beyond rapier's
+    // contact tolerance, the base pushed into the shelf by no more
+    assert!(
+        lowest_gap > -0.005,
+        "the top box went into the base: {lowest_gap:.4} m"
+    );
+    assert!(
+        gap_end.abs() < 0.005,
+        "the top box is not resting on the base: gap {gap_end:.4} m"
+    );
+    assert!(
+        (base_end.y - base_y0).abs() < 0.005,
+        "the base moved: {:.4} m",
+        base_end.y - base_y0
+    );
+    assert!(
+        top_end.vy.abs() < 0.05 && base_end.vy.abs() < 0.05,
+        "not at rest: {top_end:?} {base_end:?}"
+    );
+}
