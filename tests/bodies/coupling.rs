@@ -89,6 +89,8 @@ fn csv_rows(path: &std::path::Path, name: &str) -> Vec<Vec<f64>> {
 /// that read its run directory: loads.csv and bodies.csv rows for the wedge.
 struct FreeFallRun {
     case: mpsfsi::case::Case,
+    /// The wedge's mass per metre, from the case.
+    mass: f64,
     loads: Vec<Vec<f64>>,  // time, fx, fy, mz
     bodies: Vec<Vec<f64>>, // time, x, y, angle, vx, vy, omega
 }
@@ -112,8 +114,13 @@ fn free_fall_run() -> &'static FreeFallRun {
             summary.max_velocity
         );
         let _ = std::fs::remove_dir_all(&dir);
+        let mass = match case.bodies[0].motion {
+            mpsfsi::case::Motion::Free { mass, .. } => mass,
+            _ => panic!("the free-fall wedge is not a free body"),
+        };
         FreeFallRun {
             case,
+            mass,
             loads,
             bodies,
         }
@@ -127,12 +134,13 @@ fn free_fall_run() -> &'static FreeFallRun {
 /// monotonically once the fluid force exceeds the weight.
 #[test]
 fn free_fall_wedge_velocity_matches_its_own_loads() {
-    let mass = 241.0;
     let FreeFallRun {
         case,
+        mass,
         loads,
         bodies,
     } = free_fall_run();
+    let mass = *mass;
     assert_eq!(loads.len(), bodies.len());
     assert!(loads.len() > 100, "too few samples: {}", loads.len());
     let g = case.fluid.gravity[1];
@@ -209,8 +217,10 @@ fn free_fall_wedge_velocity_matches_its_own_loads() {
 /// -37.2 % and -48.5 %.
 #[test]
 fn free_fall_wedge_slows_like_the_momentum_model() {
-    let FreeFallRun { case, bodies, .. } = free_fall_run();
-    let (mass, g) = (241.0, -case.fluid.gravity[1]);
+    let FreeFallRun {
+        case, mass, bodies, ..
+    } = free_fall_run();
+    let (mass, g) = (*mass, -case.fluid.gravity[1]);
     let v0 = -case.bodies[0].motion_velocity_y();
     let (c_f, t_chine) = (14.04, 0.0149);
     // every sample while the jet root is below the chines, against the model integrated
