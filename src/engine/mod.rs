@@ -12,5 +12,6 @@ pub mod scene;
 pub mod simulation;
 pub mod step;
 pub mod walls;
+mod workspace;
 
 pub use simulation::{SimError, Simulation, StageTimes, StepInfo, WallLoad};

@@ -65,6 +65,20 @@ pub struct StageTimes {
     pub bookkeeping: f64,
 }
 
+impl std::ops::AddAssign for StageTimes {
+    fn add_assign(&mut self, o: Self) {
+        self.explicit_forces += o.explicit_forces;
+        self.neighbors += o.neighbors;
+        self.walls += o.walls;
+        self.number_density += o.number_density;
+        self.assemble += o.assemble;
+        self.solve += o.solve;
+        self.correct += o.correct;
+        self.spacing += o.spacing;
+        self.bookkeeping += o.bookkeeping;
+    }
+}
+
 impl StageTimes {
     pub fn total(&self) -> f64 {
         self.explicit_forces
@@ -117,7 +131,7 @@ pub struct Simulation {
     pub total_solver_iterations: u64,
     pub(crate) neighbors: NeighborList,
     pub(crate) contacts: WallContacts,
-    pub(crate) scratch: super::step::Scratch,
+    pub(crate) scratch: super::workspace::Scratch,
     /// The pressure preconditioner carried from step to step (the AMG hierarchy, see
     /// engine::pressure::reuse). State, not a buffer: it changes the iterates of later
     /// solves (within the solver tolerance), so it lives with the simulation it serves.

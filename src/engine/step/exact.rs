@@ -23,7 +23,12 @@
 //! A run costs 2.4-2.7 times the approximate one: the GMRES iterations (about 14 a step
 //! at 1 cm) each apply the gradient, the divergence and an AMG cycle.
 
-use super::*;
+use super::correction::corrected_gradient_matrix;
+use crate::engine::kernel::Kernel;
+use crate::engine::math::{Mat2, Real, Vec2};
+use crate::engine::pressure::{self, SolveParams};
+use crate::engine::simulation::{SimError, Simulation};
+use rayon::prelude::*;
 
 /// GMRES stops at this residual relative to the pressure equation's right-hand side:
 /// the plate's added mass is the same to four digits at 1e-3 and 1e-6 (about 14

@@ -1,0 +1,134 @@
+//! End of step: particles that left the domain or ran away are removed, and the state
+//! is checked for divergence.
+
+use super::density::neighbor_list;
+use crate::engine::math::Real;
+use crate::engine::simulation::{SimError, Simulation};
+use crate::engine::walls::WallContacts;
+use rayon::prelude::*;
+
+pub(super) fn remove_particles_outside_domain(sim: &mut Simulation) -> usize {
+    let (lo, hi) = (sim.domain_min, sim.domain_max);
+    let keep: Vec<bool> = sim
+        .particles
+        .position
+        .iter()
+        .map(|p| p.x >= lo.x && p.y >= lo.y && p.x <= hi.x && p.y <= hi.y)
+        .collect();
+    remove_particles(sim, &keep)
+}
+
+/// Remove the particles faster than the speed limit while the allowance
+/// (`scheme.runaway_allowance`) lasts; past it they stay, and `check_health` fails the
+/// run on the first. A non-finite velocity is never removed: that is a diverged step.
+pub(super) fn remove_runaways(sim: &mut Simulation) -> usize {
+    // no allowance left: nothing to scan for, check_health reports the first runaway
+    if sim.runaways >= sim.runaway_budget {
+        return 0;
+    }
+    let limit = sim.speed_limit;
+    let fast: Vec<usize> = (0..sim.particles.len())
+        .into_par_iter()
+        .filter(|&i| sim.particles.velocity[i].norm() > limit)
+        .collect();
+    if fast.is_empty() || sim.runaways + fast.len() > sim.runaway_budget {
+        return 0;
+    }
+    if sim.first_runaway.is_none() {
+        let i = fast[0];
+        let (x, u) = (sim.particles.position[i], sim.particles.velocity[i]);
+        sim.first_runaway = Some(format!(
+            "step {}, t = {:.6} s: particle {i} at ({:.4}, {:.4}) reached {:.3} m/s (limit {limit:.3} m/s)",
+            sim.steps,
+            sim.time,
+            x.x,
+            x.y,
+            u.norm()
+        ));
+    }
+    sim.runaways += fast.len();
+    let mut keep = vec![true; sim.particles.len()];
+    for i in fast {
+        keep[i] = false;
+    }
+    remove_particles(sim, &keep)
+}
+
+/// Keep the particles flagged in `keep` (counted in `sim.removed`), with their lists.
+pub(super) fn remove_particles(sim: &mut Simulation, keep: &[bool]) -> usize {
+    let removed = keep.iter().filter(|k| !**k).count();
+    if removed > 0 {
+        sim.particles.retain(&keep);
+        sim.removed += removed;
+        // the particles are renumbered: the AMG hierarchy's row keys mean nothing now
+        sim.solver_cache.invalidate();
+        // lists index particles: rebuild them for the next step's explicit stage
+        sim.neighbors = neighbor_list(&sim.params, &sim.particles.position);
+        let keep_contacts = {
+            let mut offsets = vec![0u32];
+            let mut contacts = Vec::new();
+            for (i, k) in keep.iter().enumerate() {
+                if *k {
+                    contacts.extend_from_slice(sim.contacts.of(i));
+                    offsets.push(contacts.len() as u32);
+                }
+            }
+            WallContacts { offsets, contacts }
+        };
+        sim.contacts = keep_contacts;
+    }
+    removed
+}
+
+/// Non-finite values, runaway speed or collapsed number density end the run.
+pub(super) fn check_health(sim: &Simulation) -> Result<Real, SimError> {
+    let p = &sim.particles;
+    let fail = |i: usize, what: String| SimError::Diverged {
+        step: sim.steps,
+        time: sim.time,
+        particle: i,
+        x: p.position[i].x,
+        y: p.position[i].y,
+        what,
+    };
+    if p.is_empty() {
+        return Err(SimError::NoParticles {
+            step: sim.steps,
+            time: sim.time,
+        });
+    }
+    let mut max_speed: Real = 0.0;
+    for i in 0..p.len() {
+        let (x, u) = (p.position[i], p.velocity[i]);
+        if !(x.x.is_finite() && x.y.is_finite()) {
+            return Err(fail(i, "non-finite position".into()));
+        }
+        if !(u.x.is_finite() && u.y.is_finite()) {
+            return Err(fail(i, "non-finite velocity".into()));
+        }
+        if !p.pressure[i].is_finite() {
+            return Err(fail(i, "non-finite pressure".into()));
+        }
+        let s = u.norm();
+        if s > sim.speed_limit {
+            return Err(fail(
+                i,
+                format!(
+                    "runaway velocity {s:.3} m/s (limit {:.3} m/s)",
+                    sim.speed_limit
+                ),
+            ));
+        }
+        if p.number_density[i] > 4.0 * sim.params.n0 {
+            return Err(fail(
+                i,
+                format!(
+                    "particle number density collapsed to {:.2} n0",
+                    p.number_density[i] / sim.params.n0
+                ),
+            ));
+        }
+        max_speed = max_speed.max(s);
+    }
+    Ok(max_speed)
+}

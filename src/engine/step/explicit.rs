@@ -1,0 +1,101 @@
+//! Explicit stage: gravity and viscosity give u*, and x* = x + dt u* (paper 003
+//! eqs. 9-10).
+
+use super::walls::KernelWeights;
+use crate::case::ViscosityKind;
+use crate::engine::kernel::Kernel;
+use crate::engine::math::{vec2, Real, Vec2};
+use crate::engine::params::DIM;
+use crate::engine::simulation::{Simulation, WallLoad};
+use rayon::prelude::*;
+
+/// Gravity and (when nu > 0) viscosity with no-slip (or free-slip) walls.
+pub(super) fn apply_explicit_forces<K: Kernel>(
+    sim: &mut Simulation,
+    weights: &KernelWeights<K>,
+    dt: Real,
+    loads: &mut [WallLoad],
+) {
+    let g = vec2(sim.params.gravity);
+    let nu = sim.params.viscosity;
+    sim.scratch.u_start.clone_from(&sim.particles.velocity);
+    if nu <= 0.0 {
+        sim.particles
+            .velocity
+            .par_iter_mut()
+            .for_each(|u| *u += g * dt);
+        return;
+    }
+    let c = sim.params.laplacian_coefficient;
+    let (x, u) = (&sim.particles.position, &sim.particles.velocity);
+    let (nb, contacts) = (&sim.neighbors, &sim.contacts);
+    let free_slip: Vec<bool> = sim.walls.iter().map(|w| w.free_slip).collect();
+    let form = sim.scheme.viscosity;
+    // a particle created after the last neighbour search has no list yet
+    let accel: Vec<(Vec2, Vec2)> = (0..x.len())
+        .into_par_iter()
+        .map(|i| {
+            if i >= nb.len() {
+                return (g, Vec2::zeros());
+            }
+            let mut lap = Vec2::zeros();
+            for &j in nb.of(i) {
+                let j = j as usize;
+                let rij = x[j] - x[i];
+                let r = rij.norm();
+                let du = u[j] - u[i];
+                lap += match form {
+                    ViscosityKind::Laplacian => du * weights.laplacian(r),
+                    ViscosityKind::StrainRate if r > 0.0 => {
+                        rij * ((DIM + 2.0) * du.dot(&rij) / (r * r) * weights.laplacian(r))
+                    }
+                    ViscosityKind::StrainRate => Vec2::zeros(),
+                };
+            }
+            let mut wall = Vec2::zeros();
+            for ct in contacts.of(i) {
+                // mirror velocity 2 u_w - u_i (no slip); free slip mirrors the
+                // normal component only, so the wall exerts no shear
+                let relative = ct.wall_velocity - u[i];
+                let mirrored = if free_slip[ct.object as usize] {
+                    ct.normal * relative.dot(&ct.normal)
+                } else {
+                    relative
+                };
+                wall += mirrored * (2.0 * ct.terms.laplacian_sum);
+            }
+            (g + (lap + wall) * (nu * c), wall * (nu * c))
+        })
+        .collect();
+    let m = sim.params.particle_mass;
+    for (i, (a, _)) in accel.iter().enumerate() {
+        sim.particles.velocity[i] += a * dt;
+    }
+    for (i, (_, aw)) in accel.iter().enumerate() {
+        if i < sim.neighbors.len() {
+            for ct in sim.contacts.of(i) {
+                // split the wall acceleration between contacts by their Laplacian weight
+                let total: Real = sim
+                    .contacts
+                    .of(i)
+                    .iter()
+                    .map(|c| c.terms.laplacian_sum)
+                    .sum();
+                if total > 0.0 {
+                    let share = aw * (ct.terms.laplacian_sum / total);
+                    loads[ct.object as usize].viscous_force -= share * m;
+                }
+            }
+        }
+    }
+}
+
+pub(super) fn predict_positions(sim: &mut Simulation, dt: Real) {
+    let p = &sim.particles;
+    sim.scratch.x_star = p
+        .position
+        .par_iter()
+        .zip(p.velocity.par_iter())
+        .map(|(x, u)| x + u * dt)
+        .collect();
+}

@@ -1,0 +1,171 @@
+//! One projection step of semi-implicit MPS, as a list of named stages.
+//!
+//! Default scheme (MPS-HS-HL-ECS with the corrected gradient, papers 003 and 004):
+//! explicit viscosity and gravity give u*, x*; the pressure Poisson equation with the
+//! higher-order source plus error-compensating terms is solved on x* with the
+//! (lattice-normalised) higher-order Laplacian; the corrected gradient corrects
+//! velocity and position. Walls enter through the virtual-lattice sums of `walls`.
+//!
+//! Walls and the pressure equation (our formulation): virtual wall points take the
+//! particle's pressure extrapolated with the Neumann condition of an accelerating wall,
+//! p_k = p_i + rho (g - a_w) · (x_k - x_i) (notes §2.2), so the wall adds no unknowns
+//! and no matrix entries, only right-hand-side terms; the same extrapolation gives the
+//! wall part of the gradient, whose reaction is the load on the wall. The kinematic
+//! condition enters the source: virtual points move with the wall, so the HS source
+//! gains ∇Z · (u_i^n - u_w), the rate at which the wall lattice's share of n changes
+//! with the relative velocity at the start of the step (the body-force part of u* is
+//! already carried by the Neumann term; counting it twice over-corrects). With the PND
+//! source (classic scheme) virtual points take p_i (Harada et al. 2008) and the wall
+//! acts through the number density alone.
+//!
+//! The stages live in the sibling files, one per stage group: `explicit`, `density`
+//! (neighbours, number density, divergence), `free_surface`, `pressure_equation`,
+//! `exact` (the optional exact projection), `correction`, `spacing`, `bookkeeping`.
+
+mod bookkeeping;
+mod correction;
+mod density;
+mod exact;
+mod explicit;
+mod free_surface;
+mod pressure_equation;
+mod spacing;
+mod walls;
+
+use super::kernel::Kernel;
+use super::math::Real;
+use super::simulation::{SimError, Simulation, StageTimes, StepInfo, WallLoad};
+use super::walls::WallContacts;
+use crate::case::{Projection, WallLoadKind};
+use crate::with_kernel;
+use std::time::Instant;
+use walls::{placed_walls, wall_kernels, KernelWeights};
+
+impl Simulation {
+    /// Neighbours, wall contacts, number density and divergence of the current state: call
+    /// it after moving particles by hand (as the perturbed-lattice stress scene does).
+    pub fn initialize(&mut self) {
+        with_kernel!(self.scheme.kernel, K => initialize::<K>(self))
+    }
+
+    /// Advance by `dt`. Body wall states must hold the pose and velocity at the start of
+    /// the step; they are advanced kinematically (the coupling may overwrite them after).
+    pub fn step(&mut self, dt: Real) -> Result<StepInfo, SimError> {
+        with_kernel!(self.scheme.kernel, K => step::<K>(self, dt))
+    }
+}
+
+/// Runs `stage` and adds its wall-clock seconds to `total`.
+fn timed<T>(total: &mut f64, stage: impl FnOnce() -> T) -> T {
+    let start = Instant::now();
+    let out = stage();
+    *total += start.elapsed().as_secs_f64();
+    out
+}
+
+fn initialize<K: Kernel>(sim: &mut Simulation) {
+    sim.neighbors = density::neighbor_list(&sim.params, &sim.particles.position);
+    let walls = placed_walls(sim, 0.0);
+    let weights = KernelWeights::<K>::new(sim);
+    let kernels = wall_kernels(sim);
+    sim.contacts = WallContacts::build(&sim.particles.position, &walls, &kernels, &weights);
+    density::initial_number_density_and_divergence::<K>(sim);
+}
+
+/// The step, stage by stage.
+fn step<K: Kernel>(sim: &mut Simulation, dt: Real) -> Result<StepInfo, SimError> {
+    let mut times = StageTimes::default();
+    let weights = KernelWeights::<K>::new(sim);
+    // loads of this step, one per wall object, accumulated by every stage with a wall term
+    let mut loads = vec![WallLoad::default(); sim.walls.len()];
+
+    timed(&mut times.explicit_forces, || {
+        // u* = u + dt (g + nu ∇²u), paper 003 eq. 9; x* = x + dt u*, eq. 10
+        explicit::apply_explicit_forces::<K>(sim, &weights, dt, &mut loads);
+        explicit::predict_positions(sim, dt);
+    });
+    // neighbours at x* (cell grid, counting sort)
+    timed(&mut times.neighbors, || {
+        sim.neighbors = density::neighbor_list(&sim.params, &sim.scratch.x_star);
+    });
+    // the walls at their predicted pose and each particle's contacts with them
+    let walls = timed(&mut times.walls, || {
+        let walls = placed_walls(sim, dt);
+        let kernels = wall_kernels(sim);
+        sim.contacts = WallContacts::build(&sim.scratch.x_star, &walls, &kernels, &weights);
+        walls
+    });
+    timed(&mut times.number_density, || {
+        // n* with the wall lattice (Harada et al. 2008)
+        density::compute_number_density::<K>(sim);
+        // n* < beta n0 confirmed by a one-sided neighbourhood (paper 003 §2.3)
+        free_surface::detect_free_surface::<K>(sim);
+    });
+    timed(&mut times.assemble, || {
+        // the Neumann extrapolation gradient of every wall contact (notes §2.2)
+        pressure_equation::compute_neumann_gradients(sim, dt);
+        // source HS + ECS (paper 004 eqs. 3, 10-11) and HL rows (eq. 9)
+        pressure_equation::assemble_pressure_equation::<K>(sim, &weights, dt);
+    });
+    let (iterations, residual) = timed(&mut times.solve, || -> Result<_, SimError> {
+        let (mut iterations, residual) = pressure_equation::solve_pressure(sim)?;
+        if sim.scheme.projection == Projection::Exact {
+            iterations += exact::correct_to_exact_projection::<K>(sim, dt)?;
+        }
+        Ok((iterations, residual))
+    })?;
+    timed(&mut times.correct, || {
+        // u^{n+1} = u* - dt/rho ∇p, x^{n+1} = x* + dt (u^{n+1} - u*) (paper 003 eqs. 11-12);
+        // the wall loads
+        correction::correct_velocity_and_position::<K>(sim, &walls, dt, &mut loads);
+    });
+    timed(&mut times.spacing, || {
+        // the filter before the safety net, which must have the last word on wall approach
+        if sim.scheme.velocity_filter > 0.0 {
+            spacing::filter_velocity::<K>(sim);
+        }
+        if !sim.damping.is_empty() {
+            spacing::absorb_waves(sim, dt);
+        }
+        spacing::keep_particles_apart(sim, &walls, dt, &mut loads);
+        if sim.scheme.shifting > 0.0 {
+            spacing::shift_particles::<K>(sim);
+        }
+    });
+    let (removed, max_speed) = timed(&mut times.bookkeeping, || {
+        // n and ∇·u at the end of the step, for the error-compensating source
+        density::update_number_density_and_divergence::<K>(sim);
+        sim.loads = total_loads(loads, sim.scheme.wall_load);
+        for wall in &mut sim.walls {
+            wall.state = wall.state.advanced(dt);
+        }
+        sim.time += dt;
+        sim.steps += 1;
+        sim.total_solver_iterations += iterations as u64;
+        let removed =
+            bookkeeping::remove_particles_outside_domain(sim) + bookkeeping::remove_runaways(sim);
+        bookkeeping::check_health(sim).map(|max_speed| (removed, max_speed))
+    })?;
+    sim.stage_times += times;
+    Ok(StepInfo {
+        dt,
+        solver_iterations: iterations,
+        solver_residual: residual,
+        unknowns: sim.scratch.matrix.n,
+        max_speed,
+        removed,
+    })
+}
+
+/// Each wall object's load: pressure and viscosity; the repulsion safety net only with
+/// the reaction estimator (the pressure integral reports its share apart).
+fn total_loads(mut loads: Vec<WallLoad>, estimator: WallLoadKind) -> Vec<WallLoad> {
+    for load in &mut loads {
+        load.force = load.pressure_force + load.viscous_force;
+        if estimator == WallLoadKind::Reaction {
+            load.force += load.repulsion_force;
+            load.moment += load.repulsion_moment;
+        }
+    }
+    loads
+}

@@ -1,0 +1,185 @@
+//! Spacing control after the correction: velocity filter, sponge layers, the collision
+//! and wall-repulsion safety net, particle shifting.
+
+use crate::case::SpacingControl;
+use crate::engine::kernel::Kernel;
+use crate::engine::math::{Real, Vec2};
+use crate::engine::simulation::{Simulation, WallLoad};
+use crate::engine::walls::{moment_about, PlacedWall};
+use rayon::prelude::*;
+
+/// Safety net: pairwise collision below `collision_distance` l0 and an inelastic
+/// wall impulse below `wall_repulsion_distance` l0 (textbook values 0.5 and e = 0.2).
+pub(super) fn keep_particles_apart(
+    sim: &mut Simulation,
+    walls: &[PlacedWall],
+    dt: Real,
+    loads: &mut [WallLoad],
+) {
+    let l0 = sim.params.l0;
+    let e = sim.scheme.collision_restitution;
+    let m = sim.params.particle_mass;
+    let n = sim.particles.len();
+    if sim.scheme.spacing_control == SpacingControl::Collision {
+        let rc = sim.scheme.collision_distance * l0;
+        let (x, u, nb) = (
+            &sim.particles.position,
+            &sim.particles.velocity,
+            &sim.neighbors,
+        );
+        let du: Vec<Vec2> = (0..n)
+            .into_par_iter()
+            .map(|i| {
+                let mut d = Vec2::zeros();
+                for &j in nb.of(i) {
+                    let j = j as usize;
+                    let r = x[j] - x[i];
+                    let dist = r.norm();
+                    if dist < rc && dist > 0.0 {
+                        let rh = r / dist;
+                        let vn = (u[j] - u[i]).dot(&rh);
+                        if vn < 0.0 {
+                            d += rh * (0.5 * (1.0 + e) * vn);
+                        }
+                    }
+                }
+                d
+            })
+            .collect();
+        let parts = &mut sim.particles;
+        for i in 0..n {
+            parts.velocity[i] += du[i];
+            parts.position[i] += du[i] * dt;
+        }
+    }
+    let rw = sim.scheme.wall_repulsion_distance * l0;
+    if rw > 0.0 {
+        for i in 0..n {
+            for c in sim.contacts.of(i) {
+                if c.distance >= rw && !c.penetrated {
+                    continue;
+                }
+                let u = sim.particles.velocity[i];
+                let vn = (u - c.wall_velocity).dot(&c.normal);
+                let mut du = Vec2::zeros();
+                if vn < 0.0 {
+                    du = -c.normal * ((1.0 + e) * vn);
+                }
+                sim.particles.velocity[i] += du;
+                let mut pos = sim.particles.position[i] + du * dt;
+                if c.penetrated {
+                    // back outside, half the safety distance off the surface
+                    pos = c.point + c.normal * (0.5 * rw);
+                }
+                sim.particles.position[i] = pos;
+                let f = -du * (m / dt);
+                let load = &mut loads[c.object as usize];
+                load.repulsion_force += f;
+                load.repulsion_moment +=
+                    moment_about(walls[c.object as usize].state.center_of_mass, c.point, f);
+            }
+        }
+    }
+}
+
+/// The velocity filter (`scheme.velocity_filter`): u_i += eps Σ_j w_ij (u_j - u_i) / n0
+/// over the fluid neighbours at x*. The pair weights are symmetric, so the fluid's
+/// momentum is unchanged; a smooth field changes by O(eps l0² ∇²u) per step, while the
+/// odd-even mode (neighbours moving in opposite directions, invisible to the divergence
+/// of the PPE source and to the gradient) loses a share of order eps every step.
+pub(super) fn filter_velocity<K: Kernel>(sim: &mut Simulation) {
+    let (re, n0) = (sim.params.re, sim.params.n0);
+    let eps = sim.scheme.velocity_filter;
+    let (x, u, nb) = (&sim.scratch.x_star, &sim.particles.velocity, &sim.neighbors);
+    let du: Vec<Vec2> = (0..u.len())
+        .into_par_iter()
+        .map(|i| {
+            if i >= nb.len() {
+                return Vec2::zeros();
+            }
+            let mut s = Vec2::zeros();
+            for &j in nb.of(i) {
+                let j = j as usize;
+                let d = (x[j] - x[i]).norm();
+                if d < re && d > 0.0 {
+                    s += (u[j] - u[i]) * K::w(d, re);
+                }
+            }
+            s * (eps / n0)
+        })
+        .collect();
+    for (ui, d) in sim.particles.velocity.iter_mut().zip(du) {
+        *ui += d;
+    }
+}
+
+/// Fickian particle shifting (Lind et al. 2012, in MPS form): δr_i = -A l0² ∇n_i / n0,
+/// with ∇n_i = Σ_j w'(r_ij) (x_i - x_j)/r_ij plus the wall lattice's ∇Z, so particles
+/// drift from crowded to sparse places and a wall counts as filled (no shift into it).
+/// Next to the free surface (a surface particle within r_e) only the tangential part
+/// is kept: the surface deficit of n is physical, not disorder. The shift is capped at
+/// 0.1 l0 per step. Velocities are not re-interpolated: shifts are O(A l0) per step.
+pub(super) fn shift_particles<K: Kernel>(sim: &mut Simulation) {
+    let (l0, re, n0) = (sim.params.l0, sim.params.re, sim.params.n0);
+    let a = sim.scheme.shifting;
+    let (x, nb, contacts, surface) = (
+        &sim.particles.position,
+        &sim.neighbors,
+        &sim.contacts,
+        &sim.particles.free_surface,
+    );
+    let shift: Vec<Vec2> = (0..x.len())
+        .into_par_iter()
+        .map(|i| {
+            let mut grad = Vec2::zeros();
+            let mut near_surface = surface[i];
+            for &j in nb.of(i) {
+                let j = j as usize;
+                let r = x[i] - x[j];
+                let d = r.norm();
+                if d >= re || d == 0.0 {
+                    continue;
+                }
+                grad += r * (K::dw(d, re) / d);
+                near_surface |= surface[j];
+            }
+            for c in contacts.of(i) {
+                grad += c.terms.number_density_gradient;
+            }
+            let mut dr = grad * (-a * l0 * l0 / n0);
+            if near_surface {
+                let g = grad.norm();
+                if g > 0.0 {
+                    let normal = grad / g;
+                    dr -= normal * dr.dot(&normal);
+                }
+            }
+            let cap = 0.1 * l0;
+            let len = dr.norm();
+            if len > cap {
+                dr *= cap / len;
+            }
+            dr
+        })
+        .collect();
+    for (xi, dr) in sim.particles.position.iter_mut().zip(shift) {
+        *xi += dr;
+    }
+}
+
+/// Sponge layers: u <- u / (1 + alpha dt), implicit so any rate is stable. Positions
+/// of this step are already set; the damped velocity moves the particle from the next.
+pub(super) fn absorb_waves(sim: &mut Simulation, dt: Real) {
+    let layers = &sim.damping;
+    let x = &sim.particles.position;
+    sim.particles
+        .velocity
+        .par_iter_mut()
+        .enumerate()
+        .for_each(|(i, u)| {
+            let alpha: Real = layers.iter().map(|l| l.rate(x[i])).sum();
+            if alpha > 0.0 {
+                *u /= 1.0 + alpha * dt;
+            }
+        });
+}

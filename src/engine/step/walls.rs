@@ -1,0 +1,66 @@
+//! The step's view of the wall model: the kernel weights the wall sums use, and the
+//! walls placed at a pose.
+
+use crate::case::LaplacianKind;
+use crate::engine::kernel::Kernel;
+use crate::engine::math::Real;
+use crate::engine::simulation::Simulation;
+use crate::engine::walls::{PlacedWall, WallKernels, WallWeights};
+use std::marker::PhantomData;
+
+pub(super) struct KernelWeights<K> {
+    re: Real,
+    re_lap: Real,
+    classic_laplacian: bool,
+    _k: PhantomData<K>,
+}
+
+impl<K: Kernel> KernelWeights<K> {
+    pub(super) fn new(sim: &Simulation) -> Self {
+        Self {
+            re: sim.params.re,
+            re_lap: sim.params.re_lap,
+            // Imoto's second-order Laplacian is the classic one (paper 000 Theorem 3.1)
+            classic_laplacian: matches!(
+                sim.scheme.laplacian,
+                LaplacianKind::Classic | LaplacianKind::SecondOrder
+            ),
+            _k: PhantomData,
+        }
+    }
+    #[inline]
+    pub(super) fn laplacian(&self, r: Real) -> Real {
+        if self.classic_laplacian {
+            K::w(r, self.re_lap)
+        } else {
+            K::hl(r, self.re_lap)
+        }
+    }
+}
+
+impl<K: Kernel> WallWeights for KernelWeights<K> {
+    fn w(&self, r: Real) -> Real {
+        K::w(r, self.re)
+    }
+    fn dw(&self, r: Real) -> Real {
+        K::dw(r, self.re)
+    }
+    fn lap(&self, r: Real) -> Real {
+        self.laplacian(r)
+    }
+}
+
+pub(super) fn wall_kernels(sim: &Simulation) -> WallKernels {
+    WallKernels {
+        l0: sim.params.l0,
+        re: sim.params.re,
+        re_lap: sim.params.re_lap,
+    }
+}
+
+pub(super) fn placed_walls(sim: &Simulation, dt: Real) -> Vec<PlacedWall> {
+    sim.walls
+        .iter()
+        .map(|w| PlacedWall::new(w, w.state.advanced(dt)))
+        .collect()
+}

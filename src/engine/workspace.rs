@@ -1,0 +1,27 @@
+//! Buffers the step reuses from one step to the next (no allocation at a steady size).
+
+use super::math::{Real, Vec2};
+use super::pressure::CsrMatrix;
+
+/// Buffers reused from step to step.
+#[derive(Debug, Default)]
+pub(crate) struct Scratch {
+    pub(crate) x_star: Vec<Vec2>,
+    /// u^n, before the explicit forces.
+    pub(crate) u_start: Vec<Vec2>,
+    pub(crate) n_star: Vec<Real>,
+    pub(crate) unknown_of: Vec<u32>,
+    pub(crate) particle_of: Vec<u32>,
+    pub(crate) rhs: Vec<Real>,
+    pub(crate) solution: Vec<Real>,
+    pub(crate) neumann: Vec<Vec2>,
+    /// Dirichlet value of each free-surface particle (0 elsewhere).
+    pub(crate) surface_pressure: Vec<Real>,
+    pub(crate) matrix: CsrMatrix,
+    /// The source's terms beyond (rho/dt) ∇·u* (ECS, PND relaxation), per particle, for
+    /// the exact projection.
+    pub(crate) source_extra: Vec<Real>,
+    /// The exact projection's correction to the approximate pressure, per particle
+    /// (the next step's initial guess).
+    pub(crate) exact_correction: Vec<Real>,
+}
