@@ -10,8 +10,8 @@
 //! With the 1/n0 prefactor of paper 004 eqs. 3 and 9 the HL Laplacian of |x|² is 8.5
 //! instead of 4 at r_e = 2.1 l0 (Koshizuka kernel), which scales pressures down.
 
-use super::kernel::Kernel;
 use super::math::Real;
+use super::operators::LatticeConstants;
 use crate::case::{Case, LaplacianKind, Scheme};
 use crate::with_kernel;
 
@@ -37,20 +37,9 @@ pub struct MpsParameters {
     pub gravity: [Real; 2],
     /// Mass per particle per metre of span: rho l0².
     pub particle_mass: Real,
-}
-
-/// Points (a, b) of the unit lattice within `reach` (excluding the origin), scaled by l0.
-pub fn lattice_offsets(reach: Real, l0: Real) -> Vec<(Real, Real)> {
-    let m = (reach / l0).ceil() as i64 + 1;
-    let mut v = Vec::new();
-    for a in -m..=m {
-        for b in -m..=m {
-            if (a, b) != (0, 0) {
-                v.push((a as Real * l0, b as Real * l0));
-            }
-        }
-    }
-    v
+    /// The full lattice at r_e (number density, gradient, source) and at r_e,lap.
+    pub lattice: LatticeConstants,
+    pub lattice_lap: LatticeConstants,
 }
 
 impl MpsParameters {
@@ -73,29 +62,27 @@ impl MpsParameters {
     ) -> Self {
         let re = scheme.radius * l0;
         let re_lap = scheme.laplacian_radius() * l0;
-        let offsets = lattice_offsets(re.max(re_lap), l0);
-        let r_of = |(x, y): &(Real, Real)| (x * x + y * y).sqrt();
-        let (n0, lambda, lap_sum, div_sum) = with_kernel!(scheme.kernel, K => {
-            let n0: Real = offsets.iter().map(|o| K::w(r_of(o), re)).sum();
-            let wl: Real = offsets.iter().map(|o| K::w(r_of(o), re_lap)).sum();
-            let wl_r2: Real = offsets.iter().map(|o| K::w(r_of(o), re_lap) * r_of(o).powi(2)).sum();
-            let lap_kernel_r2: Real = match scheme.laplacian {
-                // Imoto's second-order Laplacian is the classic one (paper 000 Theorem 3.1)
-                LaplacianKind::Classic | LaplacianKind::SecondOrder => wl_r2,
-                _ => offsets.iter().map(|o| K::hl(r_of(o), re_lap) * r_of(o).powi(2)).sum(),
-            };
-            let div: Real = offsets.iter().map(|o| K::dw(r_of(o), re) * r_of(o)).sum();
-            (n0, wl_r2 / wl, lap_kernel_r2, div)
-        });
+        // the full lattice seen from one of its points, once for the run
+        let (lattice, lattice_lap) = with_kernel!(scheme.kernel, K => (
+            LatticeConstants::compute::<K>(l0, re, 2),
+            LatticeConstants::compute::<K>(l0, re_lap, 2),
+        ));
+        let laplacian_coefficient = match scheme.laplacian {
+            // Imoto's second-order Laplacian is the classic one (paper 000 Theorem 3.1)
+            LaplacianKind::Classic | LaplacianKind::SecondOrder => lattice_lap.classic_coefficient,
+            _ => lattice_lap.hl_coefficient,
+        };
         Self {
             l0,
             re,
             re_lap,
-            n0,
-            lambda,
-            laplacian_coefficient: 2.0 * DIM / lap_sum,
-            divergence_coefficient: DIM / div_sum.abs(),
-            gradient_coefficient: DIM / n0,
+            n0: lattice.n0,
+            lambda: lattice_lap.lambda,
+            laplacian_coefficient,
+            divergence_coefficient: lattice.hs_divergence_coefficient,
+            gradient_coefficient: DIM / lattice.n0,
+            lattice,
+            lattice_lap,
             density,
             viscosity,
             gravity,

@@ -29,3 +29,27 @@ pub fn divergence<K: Kernel>(
         })
         .collect()
 }
+
+/// The HS divergence of the step (paper 004 eq. 2), lattice-normalised:
+/// ⟨∇·u⟩_i = -c Σ_j w'(r) r_ij·u_ij / r, with c = d / |Σ w'(r) r| of the reference
+/// lattice ([`LatticeConstants::hs_divergence_coefficient`](super::LatticeConstants)), so
+/// the divergence of x is d on the lattice. The fluid part only: a wall adds its own
+/// (`WallContacts::add_divergence`).
+pub fn hs_divergence<K: Kernel>(cloud: &Cloud, u: &[Vec2], c: Real) -> Vec<Real> {
+    let (x, nb, re) = (cloud.positions, cloud.neighbors, cloud.re);
+    (0..x.len())
+        .into_par_iter()
+        .map(|i| {
+            let mut s = 0.0;
+            for &j in nb.of(i) {
+                let j = j as usize;
+                let r = x[j] - x[i];
+                let d = r.norm();
+                if d > 0.0 && d < re {
+                    s += K::dw(d, re) * r.dot(&(u[j] - u[i])) / d;
+                }
+            }
+            -c * s
+        })
+        .collect()
+}

@@ -64,10 +64,61 @@ impl LaplacianRow {
 /// Below this reciprocal condition number the CHL corrective matrix is not used.
 const CHL_MIN_RCOND: Real = 0.05;
 
+/// The symmetric rows with the lattice normalisation, pair by pair and without
+/// allocating: calls `visit(j, r_ij, c_ij)` for every neighbour with c_ij ≠ 0, where
+/// c_ij = a L(r_ij) scale(j), L = w for the classic Laplacian and w'' - w'/r for HL,
+/// a the lattice coefficient ([`LatticeConstants`](super::LatticeConstants)'
+/// `classic_coefficient` or `hl_coefficient`) and `scale` a symmetric pair factor (1 in
+/// a full neighbourhood). The step's pressure rows and [`laplacian_row`] with
+/// [`Normalisation::Reference`] both come from here.
+#[inline]
+pub fn for_each_lattice_coefficient<K: Kernel>(
+    classic: bool,
+    cloud: &Cloud,
+    a: Real,
+    i: usize,
+    scale: impl Fn(usize) -> Real,
+    visit: impl FnMut(usize, Vec2, Real),
+) {
+    if classic {
+        lattice_row(cloud, i, |d| K::w(d, cloud.re), a, scale, visit)
+    } else {
+        lattice_row(cloud, i, |d| K::hl(d, cloud.re), a, scale, visit)
+    }
+}
+
+#[inline(always)]
+fn lattice_row(
+    cloud: &Cloud,
+    i: usize,
+    weight: impl Fn(Real) -> Real,
+    a: Real,
+    scale: impl Fn(usize) -> Real,
+    mut visit: impl FnMut(usize, Vec2, Real),
+) {
+    let x = cloud.positions;
+    for &j in cloud.neighbors.of(i) {
+        let j = j as usize;
+        let r = x[j] - x[i];
+        let c = a * weight(r.norm()) * scale(j);
+        if c != 0.0 {
+            visit(j, r, c);
+        }
+    }
+}
+
+fn reference_row<K: Kernel>(classic: bool, cloud: &Cloud, a: Real, i: usize) -> Vec<(usize, Real)> {
+    let mut row = Vec::with_capacity(cloud.neighbors.of(i).len());
+    for_each_lattice_coefficient::<K>(classic, cloud, a, i, |_| 1.0, |j, _, c| row.push((j, c)));
+    row
+}
+
 fn classic<K: Kernel>(cloud: &Cloud, norm: Normalisation, i: usize) -> Vec<(usize, Real)> {
     let nl = match norm {
         Normalisation::Local => moments::<K>(cloud, i).wr2,
-        Normalisation::Reference(c) => c.n0 * c.lambda,
+        Normalisation::Reference(c) => {
+            return reference_row::<K>(true, cloud, c.classic_coefficient, i)
+        }
     };
     if nl <= 0.0 {
         return Vec::new();
@@ -97,15 +148,14 @@ fn normalised(
 }
 
 fn higher_order<K: Kernel>(cloud: &Cloud, norm: Normalisation, i: usize) -> Vec<(usize, Real)> {
-    let reference = match norm {
-        Normalisation::Local => None,
-        Normalisation::Reference(c) => Some(c.hl_coefficient),
-    };
+    if let Normalisation::Reference(c) = norm {
+        return reference_row::<K>(false, cloud, c.hl_coefficient, i);
+    }
     let pairs = cloud
         .pairs(i)
         .map(|(j, r, d)| (j, r, d, K::hl(d, cloud.re)))
         .collect();
-    normalised(cloud, reference, pairs)
+    normalised(cloud, None, pairs)
 }
 
 fn corrected_higher_order<K: Kernel>(

@@ -16,15 +16,20 @@
 //! Which formula each variant is, with the paper and equation, is in the doc comment of
 //! the submodule that defines it.
 
+mod density;
 mod divergence;
 mod gradient;
 mod laplacian;
 mod moments;
 mod second_derivatives;
 
-pub use divergence::divergence;
-pub use gradient::{gradient, gradient_row, GradientRow, CORRECTED_GRADIENT_MIN_RCOND};
-pub use laplacian::{laplacian, laplacian_row, LaplacianRow};
+pub use density::number_density;
+pub use divergence::{divergence, hs_divergence};
+pub use gradient::{
+    corrected_gradient_matrix, gradient, gradient_row, minimum_over_neighbourhood,
+    pressure_gradient, GradientRow, PressureGradient, VirtualPoints,
+};
+pub use laplacian::{for_each_lattice_coefficient, laplacian, laplacian_row, LaplacianRow};
 pub use moments::LatticeConstants;
 pub use second_derivatives::{
     anisotropic_second_derivatives, second_derivatives, SecondDerivatives,

@@ -83,9 +83,17 @@ pub struct LatticeConstants {
     pub lambda: Real,
     /// θ = Σ w x² y² / r² (paper 000 eq. 15; 0 in 1D).
     pub theta: Real,
+    /// 2d / Σ w r²: the classic Laplacian's 2d / (λ n0) (paper 003 eq. 15), so the
+    /// Laplacian of |x|² is 2d on the lattice.
+    pub classic_coefficient: Real,
     /// 2d / Σ L_HL(r) r² with L_HL = w'' - w'/r: the HL coefficient that replaces 1/n0
     /// of paper 004 eq. 9 so the Laplacian of |x|² is 2d on the lattice.
     pub hl_coefficient: Real,
+    /// d / |Σ w'(r) r|: the HS divergence's coefficient that replaces 1/n0 of paper 004
+    /// eq. 2 so the divergence of x is d on the lattice.
+    pub hs_divergence_coefficient: Real,
+    /// Lattice points within r_e, the point itself excluded.
+    pub neighbours: usize,
     /// 2d / Σ L_CHL(r) r² with the lattice's own corrective matrix (see [`chl_weight`]).
     pub chl_coefficient: Real,
 }
@@ -113,12 +121,13 @@ impl LatticeConstants {
             .filter(|&(_, d)| d < re)
             .collect();
         let n0: Real = inside.iter().map(|&(_, d)| K::w(d, re)).sum();
-        let wr2: Real = inside.iter().map(|&(_, d)| K::w(d, re) * d * d).sum();
+        let wr2: Real = inside.iter().map(|&(_, d)| K::w(d, re) * (d * d)).sum();
         let theta: Real = inside
             .iter()
             .map(|&(r, d)| K::w(d, re) * r.x * r.x * r.y * r.y / (d * d))
             .sum();
-        let hl: Real = inside.iter().map(|&(_, d)| K::hl(d, re) * d * d).sum();
+        let hl: Real = inside.iter().map(|&(_, d)| K::hl(d, re) * (d * d)).sum();
+        let dw_r: Real = inside.iter().map(|&(_, d)| K::dw(d, re) * d).sum();
         let mut a = Mat2::zeros();
         for &(r, d) in &inside {
             a -= r * r.transpose() * (K::dw(d, re) / d);
@@ -139,7 +148,10 @@ impl LatticeConstants {
             n0,
             lambda: wr2 / n0,
             theta,
+            classic_coefficient: 2.0 * d / wr2,
             hl_coefficient: 2.0 * d / hl,
+            hs_divergence_coefficient: d / dw_r.abs(),
+            neighbours: inside.len(),
             chl_coefficient: 2.0 * d / chl,
         }
     }

@@ -23,9 +23,10 @@
 //! A run costs 2.4-2.7 times the approximate one: the GMRES iterations (about 14 a step
 //! at 1 cm) each apply the gradient, the divergence and an AMG cycle.
 
-use super::correction::corrected_gradient_matrix;
 use crate::engine::kernel::Kernel;
 use crate::engine::math::{Mat2, Real, Vec2};
+use crate::engine::operators::corrected_gradient_matrix;
+use crate::engine::params::DIM;
 use crate::engine::pressure::{self, SolveParams};
 use crate::engine::simulation::{SimError, Simulation};
 use rayon::prelude::*;
@@ -78,7 +79,7 @@ impl Gradient {
                     moment += Mat2::new(xx, xy, xy, yy);
                 }
                 // GC, or the classic normalisation where the moments are degenerate
-                let scale = corrected_gradient_matrix(&moment, n0)
+                let scale = corrected_gradient_matrix(&moment, n0, DIM)
                     .map_or(Mat2::identity() * c_grad, |c| c / n0);
                 let row = raw.into_iter().map(|(j, g)| (j, scale * g)).collect();
                 (row, scale * linear)

@@ -80,7 +80,7 @@ pub(super) fn release_isolated_clusters(sim: &mut Simulation) {
     let (x, nb, contacts) = (&sim.scratch.x_star, &sim.neighbors, &sim.contacts);
     let surface = &sim.particles.free_surface;
     let (re, re_lap) = (sim.params.re, sim.params.re_lap);
-    let lattice_neighbours = lattice_neighbour_count(re / sim.params.l0);
+    let lattice_neighbours = sim.params.lattice.neighbours;
     let seeds: Vec<usize> = (0..x.len().min(nb.len()))
         .into_par_iter()
         .filter(|&i| {
@@ -127,15 +127,6 @@ pub(super) fn release_isolated_clusters(sim: &mut Simulation) {
         sim.particles.free_surface[i] = true;
         sim.scratch.surface_pressure[i] = 0.0;
     }
-}
-
-/// Lattice sites within `radius` (in spacings) of a site, the site excluded.
-pub(super) fn lattice_neighbour_count(radius: Real) -> usize {
-    let r = radius.ceil() as i64;
-    (-r..=r)
-        .flat_map(|a| (-r..=r).map(move |b| (a, b)))
-        .filter(|&(a, b)| (a, b) != (0, 0) && (((a * a + b * b) as Real).sqrt() < radius))
-        .count()
 }
 
 /// Below this tilt of the surface normal from the vertical, a free surface counts as level.

@@ -1,12 +1,12 @@
 //! The pressure Poisson equation: Neumann wall gradients, source, Laplacian rows,
 //! assembly and solve.
 
-use super::density::{add_wall_divergence, divergence};
+use super::density::divergence;
 use super::walls::KernelWeights;
-use crate::case::{Projection, SourceKind, WallKinematics};
+use crate::case::{LaplacianKind, Projection, SourceKind, WallKinematics};
 use crate::engine::kernel::Kernel;
 use crate::engine::math::{vec2, Real, Vec2};
-use crate::engine::operators::{laplacian_row, Cloud, LatticeConstants, Normalisation};
+use crate::engine::operators::{for_each_lattice_coefficient, laplacian_row, Cloud, Normalisation};
 use crate::engine::pressure::{self, SolveParams};
 use crate::engine::simulation::{SimError, Simulation};
 use crate::engine::walls::WallContact;
@@ -83,21 +83,12 @@ pub(super) fn assemble_pressure_equation<K: Kernel>(
         }
     }
     // source term S of ∇²p - (rho alpha / dt²) p = S
-    let mut div_star = divergence::<K>(
-        x,
+    let div_star = divergence::<K>(
+        sim,
+        &Cloud::new(x, nb, p.re),
         &sim.particles.velocity,
-        nb,
-        p.re,
-        p.divergence_coefficient,
+        &sim.scratch.u_start,
     );
-    if sim.scheme.wall_kinematics == WallKinematics::Source {
-        add_wall_divergence(
-            &mut div_star,
-            &sim.scratch.u_start,
-            &sim.contacts,
-            p.divergence_coefficient,
-        );
-    }
     let n_prev = &sim.particles.number_density;
     let div_prev = &sim.particles.number_density_rate;
     let n_star = &sim.scratch.n_star;
@@ -136,7 +127,9 @@ pub(super) fn assemble_pressure_equation<K: Kernel>(
     let kind = sim.scheme.laplacian;
     let operator_rows = !kind.is_symmetric();
     let cloud = Cloud::new(x, nb, p.re_lap);
-    let lattice = Normalisation::Reference(LatticeConstants::compute::<K>(p.l0, p.re_lap, 2));
+    let lattice = Normalisation::Reference(p.lattice_lap);
+    // Imoto's second-order Laplacian is the classic one (paper 000 Theorem 3.1)
+    let classic = matches!(kind, LaplacianKind::Classic | LaplacianKind::SecondOrder);
     let neumann = &sim.scratch.neumann;
     let nu = particle_of.len();
     // the fill n*/n0 of each neighbourhood, floored (`Scheme::laplacian_fill_floor`);
@@ -176,29 +169,23 @@ pub(super) fn assemble_pressure_equation<K: Kernel>(
         // a pair's weight over the mean fill of its two particles: symmetric, and 1 in
         // a full neighbourhood
         let pair_scale = |j: usize| fills.map_or(1.0, |f| 2.0 / (f[i] + f[j]));
-        for &j in nb.of(i) {
-            let r = x[j as usize] - x[i];
-            let l = c_lap * weights.laplacian(r.norm()) * pair_scale(j as usize);
-            if l == 0.0 {
-                continue;
-            }
+        for_each_lattice_coefficient::<K>(classic, &cloud, c_lap, i, pair_scale, |j, r, l| {
             first_moment += r * l;
             diag += l;
-            let uj = unknown_of[j as usize];
+            let uj = unknown_of[j];
             if uj != u32::MAX {
                 cols.push(uj);
                 vals.push(-l);
             } else {
-                b += l * dirichlet[j as usize];
+                b += l * dirichlet[j];
             }
-        }
+        });
         cols.push(row as u32);
         vals.push(diag);
-        let base = contacts.offsets[i] as usize;
         let wall_scale = fills.map_or(1.0, |f| 1.0 / f[i]);
-        for (k, c) in contacts.of(i).iter().enumerate() {
-            b += c_lap * wall_scale * neumann[base + k].dot(&c.terms.laplacian_moment);
-            first_moment += c.terms.laplacian_moment * (c_lap * wall_scale);
+        for (c_dot_moment, moment) in contacts.laplacian_terms(i, neumann) {
+            b += c_lap * wall_scale * c_dot_moment;
+            first_moment += moment * (c_lap * wall_scale);
         }
         // Hydrostatic consistency: the missing part of the neighbourhood (-Σ L r) is
         // filled with ghosts carrying the hydrostatic pressure p_i + rho g·r, so a

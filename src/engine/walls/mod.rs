@@ -17,7 +17,8 @@
 pub mod geometry;
 pub mod pressure_load;
 
-use crate::engine::math::{cross, perp, Real, Vec2};
+use crate::engine::math::{cross, perp, Mat2, Real, Vec2};
+use crate::engine::operators::VirtualPoints;
 use geometry::{closest_on_segment, inside, signed_distance, WallShape};
 use rayon::prelude::*;
 
@@ -324,6 +325,78 @@ impl WallContacts {
     #[inline]
     pub fn of(&self, i: usize) -> &[WallContact] {
         &self.contacts[self.offsets[i] as usize..self.offsets[i + 1] as usize]
+    }
+
+    /// n_i: the fluid part `fluid` plus every wall's share Σ Z (Harada et al. 2008).
+    #[inline]
+    pub fn number_density(&self, i: usize, fluid: Real) -> Real {
+        fluid
+            + self
+                .of(i)
+                .iter()
+                .map(|c| c.terms.number_density)
+                .sum::<Real>()
+    }
+
+    /// n_i after the particle moved by `dx` from where the contacts were found: each
+    /// wall's share carried to first order, Z + ∇Z·dx, and kept non-negative.
+    #[inline]
+    pub fn number_density_moved(&self, i: usize, fluid: Real, dx: Vec2) -> Real {
+        let mut n = fluid;
+        for c in self.of(i) {
+            n += (c.terms.number_density + c.terms.number_density_gradient.dot(&dx)).max(0.0);
+        }
+        n
+    }
+
+    /// The walls' share of the HS divergence, -c ∇Z · (u_i - u_w): the virtual points
+    /// move with the wall.
+    pub fn add_divergence(&self, div: &mut [Real], u: &[Vec2], c: Real) {
+        div.par_iter_mut().enumerate().for_each(|(i, d)| {
+            for ct in self.of(i) {
+                *d -= c * ct
+                    .terms
+                    .number_density_gradient
+                    .dot(&(u[i] - ct.wall_velocity));
+            }
+        });
+    }
+
+    /// Each wall's virtual points for the pressure gradient of particle i, with the
+    /// extrapolation gradient `neumann` of each of its contacts (p_k = p_i + c·r_ik).
+    #[inline]
+    pub fn virtual_points<'a>(
+        &'a self,
+        i: usize,
+        neumann: &'a [Vec2],
+    ) -> impl Iterator<Item = VirtualPoints> + 'a {
+        let base = self.offsets[i] as usize;
+        self.of(i).iter().enumerate().map(move |(k, c)| {
+            let [xx, xy, yy] = c.terms.moment2;
+            VirtualPoints {
+                linear: c.terms.moment2_times(neumann[base + k]),
+                moment1: c.terms.moment1,
+                moment2: Mat2::new(xx, xy, xy, yy),
+            }
+        })
+    }
+
+    /// Each wall's Laplacian terms for particle i's pressure row: (c·Σ L r, Σ L r) with
+    /// the extrapolation gradient c of the contact. The virtual pressures p_i + c·r add
+    /// the first to the right-hand side and nothing to the matrix.
+    #[inline]
+    pub fn laplacian_terms<'a>(
+        &'a self,
+        i: usize,
+        neumann: &'a [Vec2],
+    ) -> impl Iterator<Item = (Real, Vec2)> + 'a {
+        let base = self.offsets[i] as usize;
+        self.of(i).iter().enumerate().map(move |(k, c)| {
+            (
+                neumann[base + k].dot(&c.terms.laplacian_moment),
+                c.terms.laplacian_moment,
+            )
+        })
     }
 
     /// Sum of the wall terms of particle i over all objects.

@@ -1,0 +1,18 @@
+//! The particle number density n_i = Σ_j w(r_ij) (Koshizuka & Oka 1996; paper 003
+//! eq. 4), fluid neighbours only: a wall adds its own share
+//! (`WallContacts::number_density`).
+
+use super::Cloud;
+use crate::engine::kernel::Kernel;
+use crate::engine::math::Real;
+
+/// n_i over the fluid neighbours (w vanishes at and beyond r_e).
+#[inline]
+pub fn number_density<K: Kernel>(cloud: &Cloud, i: usize) -> Real {
+    let (x, re) = (cloud.positions, cloud.re);
+    let mut n = 0.0;
+    for &j in cloud.neighbors.of(i) {
+        n += K::w((x[j as usize] - x[i]).norm(), re);
+    }
+    n
+}
