@@ -47,6 +47,6 @@ fn main() {
         "particles {} wall {:.1}s iters/step {:.0}",
         sim.particle_count(),
         t0.elapsed().as_secs_f64(),
-        sim.total_solver_iterations as f64 / sim.steps as f64
+        sim.stats.total_solver_iterations as f64 / sim.steps as f64
     );
 }

@@ -35,7 +35,7 @@ fn main() {
                         p.velocity[i].y,
                         p.pressure[i],
                         p.free_surface[i],
-                        p.number_density[i] / sim.params.n0
+                        p.number_density[i] / sim.config.params.n0
                     );
                 }
             }

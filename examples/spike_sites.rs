@@ -48,7 +48,7 @@ fn main() {
                 d,
                 r.x,
                 r.y,
-                p.number_density[*i] / sim.params.n0
+                p.number_density[*i] / sim.config.params.n0
             );
         }
         println!("{line}");

@@ -43,7 +43,7 @@ fn main() {
                 p.position[pi].x,
                 p.position[pi].y,
                 p.free_surface[pi],
-                sim.removed,
+                sim.stats.removed,
                 p.len()
             );
         }

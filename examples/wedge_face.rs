@@ -48,7 +48,7 @@ fn main() {
         cf.1 += 1.0;
         let vt = v * sim.time;
         let p = &sim.particles;
-        let n0 = sim.params.n0;
+        let n0 = sim.config.params.n0;
         for i in 0..p.len() {
             for c in sim.wall_contacts().of(i).iter().filter(|c| c.object == k) {
                 let z = c.point.y / vt;
@@ -112,7 +112,7 @@ struct Noise {
 impl Noise {
     fn record(&mut self, sim: &Simulation, k: u32, v: f64, in_window: bool) {
         let p = &sim.particles;
-        let l0 = sim.params.l0;
+        let l0 = sim.config.params.l0;
         let scale = 1000.0 * v.powi(3) * sim.time;
         let (mut row, mut flipped, mut steady, mut flips) = (0.0, 0.0, 0.0, 0.0);
         for i in 0..p.len() {

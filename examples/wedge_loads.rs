@@ -18,7 +18,7 @@ fn main() {
     let k = sim.wall_names().iter().position(|n| n == "wedge").unwrap();
     let (mut t, mut fp, mut fr) = (Vec::new(), Vec::new(), Vec::new());
     let mut fm = Vec::new();
-    let m = sim.params.particle_mass;
+    let m = sim.config.params.particle_mass;
     let momentum = |s: &Simulation| s.particles.velocity.iter().map(|u| u.y).sum::<f64>() * m;
     let clock = std::time::Instant::now();
     while sim.time < 0.8 * t_chine {

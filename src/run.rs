@@ -220,22 +220,22 @@ pub fn run_case(
         end_time: end,
         wall_time_s: started.elapsed().as_secs_f64(),
         particles: sim.particle_count(),
-        particles_removed: sim.removed,
-        particles_runaway: sim.runaways,
-        first_runaway: sim.first_runaway.clone(),
+        particles_removed: sim.stats.removed,
+        particles_runaway: sim.stats.runaways,
+        first_runaway: sim.stats.first_runaway.clone(),
         max_velocity,
         min_dt: if min_dt.is_finite() { min_dt } else { 0.0 },
         max_dt,
         mean_solver_iterations: if sim.steps > 0 {
-            sim.total_solver_iterations as Real / sim.steps as Real
+            sim.stats.total_solver_iterations as Real / sim.steps as Real
         } else {
             0.0
         },
         filter_window_s,
-        stage_seconds: sim.stage_times,
+        stage_seconds: sim.stats.stage_times,
         coupling_seconds: coupling.as_ref().map_or(0.0, |c| c.seconds),
-        n0: sim.params.n0,
-        scheme: sim.scheme.clone(),
+        n0: sim.config.params.n0,
+        scheme: sim.config.scheme.clone(),
         version: env!("CARGO_PKG_VERSION").to_string(),
     };
     let json = serde_json::to_string_pretty(&summary).expect("summary serialises");

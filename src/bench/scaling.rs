@@ -366,8 +366,8 @@ pub fn measure_engine(case: &Case, steps: u64, dt: f64, study: &str) -> ScalingP
         let clock = Instant::now();
         let warm = sim.step(dt);
         let warmup_ms = clock.elapsed().as_secs_f64() * 1e3;
-        let stages_before = sim.stage_times;
-        let iterations_before = sim.total_solver_iterations;
+        let stages_before = sim.stats.stage_times;
+        let iterations_before = sim.stats.total_solver_iterations;
         let mut error = warm.err().map(|e| e.to_string());
         let clock = Instant::now();
         let cpu0 = cpu_seconds();
@@ -391,8 +391,8 @@ pub fn measure_engine(case: &Case, steps: u64, dt: f64, study: &str) -> ScalingP
             n,
             done,
             seconds,
-            stage_difference(&sim.stage_times, &stages_before),
-            sim.total_solver_iterations - iterations_before,
+            stage_difference(&sim.stats.stage_times, &stages_before),
+            sim.stats.total_solver_iterations - iterations_before,
             built,
             after,
             error,

@@ -44,11 +44,11 @@ impl Default for AddedMass {
 /// Horizontal and vertical extent of the wetted surface of wall object `wall`:
 /// contacts of the last step within one spacing of its surface (or inside it).
 pub fn wetted_extent(sim: &Simulation, wall: usize) -> Option<(Vec2, Vec2)> {
-    let reach = sim.params.l0;
+    let reach = sim.config.params.l0;
     let mut lo = Vec2::repeat(Real::INFINITY);
     let mut hi = Vec2::repeat(Real::NEG_INFINITY);
     let mut any = false;
-    for c in &sim.contacts.contacts {
+    for c in &sim.workspace.contacts.contacts {
         if c.object as usize == wall && (c.penetrated || c.distance < reach) {
             lo = lo.inf(&c.point);
             hi = hi.sup(&c.point);
@@ -74,8 +74,8 @@ pub fn estimate(
             let Some((lo, hi)) = wetted_extent(sim, wall) else {
                 return (0.0, 0.0);
             };
-            let rho = sim.params.density;
-            let l0 = sim.params.l0;
+            let rho = sim.config.params.density;
+            let l0 = sim.config.params.l0;
             // the first layer sits l0/2 off the surface: its projections span the wetted
             // surface up to about one spacing short
             let cx = 0.5 * (hi.x - lo.x + l0);

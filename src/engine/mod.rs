@@ -1,6 +1,7 @@
 //! The MPS core: pure, synchronous and deterministic. It imports neither rapier nor
 //! tokio; bodies are wall objects whose pose the coupling sets between steps.
 
+pub mod config;
 pub mod kernel;
 pub mod math;
 pub mod neighbors;

@@ -1,13 +1,14 @@
 //! The state of one simulation and what it reports each step. No globals: a job
 //! server runs many of these side by side.
 
+use super::config::Config;
 use super::math::{vec2, Real, Vec2};
-use super::neighbors::NeighborList;
 use super::params::MpsParameters;
 use super::particles::Particles;
 use super::scene::{build_scene, Scene};
-use super::walls::{WallContacts, WallObject};
-use crate::case::{Case, Scheme};
+use super::walls::WallObject;
+use super::workspace::Workspace;
+use crate::case::Case;
 
 /// Why a run stopped early.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
@@ -104,69 +105,33 @@ pub struct StepInfo {
     pub removed: usize,
 }
 
+/// Counts and timings of the run so far.
+#[derive(Debug, Clone, Default)]
+pub struct RunStatistics {
+    /// Particles removed (left the domain or ran away).
+    pub removed: usize,
+    /// Of `removed`, those that exceeded the speed limit, and the first of them (step,
+    /// time, particle and speed).
+    pub runaways: usize,
+    pub first_runaway: Option<String>,
+    pub stage_times: StageTimes,
+    pub total_solver_iterations: u64,
+}
+
+/// One simulation: its configuration (fixed for the run), its state (particles, walls,
+/// time, the loads of the last step), its statistics and the workspace the step reuses
+/// (the split of rapier's pipeline and world). No globals: a job server runs many of
+/// these side by side.
 pub struct Simulation {
-    pub params: MpsParameters,
-    pub scheme: Scheme,
+    pub config: Config,
     pub particles: Particles,
     pub walls: Vec<WallObject>,
     pub time: Real,
     pub steps: u64,
-    pub domain_min: Vec2,
-    pub domain_max: Vec2,
-    pub removed: usize,
-    pub cfl: Real,
-    pub max_dt: Real,
-    /// Speed above which the run is declared diverged.
-    pub speed_limit: Real,
-    /// Particles removed so far for exceeding `speed_limit`, and how many may be.
-    pub runaways: usize,
-    pub runaway_budget: usize,
-    /// Step, time, particle and speed of the first runaway removed.
-    pub first_runaway: Option<String>,
-    /// Sponge layers (case `damping_zones`): (start, unit direction, length, strength).
-    pub damping: Vec<DampingLayer>,
     /// Loads of the last step, one per wall object.
     pub loads: Vec<WallLoad>,
-    pub stage_times: StageTimes,
-    pub total_solver_iterations: u64,
-    pub(crate) neighbors: NeighborList,
-    pub(crate) contacts: WallContacts,
-    pub(crate) scratch: super::workspace::Scratch,
-    /// The pressure preconditioner carried from step to step (the AMG hierarchy, see
-    /// engine::pressure::reuse). State, not a buffer: it changes the iterates of later
-    /// solves (within the solver tolerance), so it lives with the simulation it serves.
-    pub(crate) solver_cache: super::pressure::SolverCache,
-}
-
-/// A sponge layer in engine form (see `case::DampingZone`).
-#[derive(Debug, Clone, Copy)]
-pub struct DampingLayer {
-    pub start: Vec2,
-    /// Unit vector from the inner to the outer edge.
-    pub direction: Vec2,
-    pub length: Real,
-    /// 1/s at the outer edge.
-    pub strength: Real,
-}
-
-impl DampingLayer {
-    pub fn new(zone: &crate::case::DampingZone) -> Self {
-        let start = vec2(zone.start);
-        let span = vec2(zone.end) - start;
-        Self {
-            start,
-            direction: span / span.norm(),
-            length: span.norm(),
-            strength: zone.strength,
-        }
-    }
-
-    /// Damping rate at `x` (1/s): strength s², s the fraction of the way into the layer.
-    #[inline]
-    pub fn rate(&self, x: Vec2) -> Real {
-        let s = ((x - self.start).dot(&self.direction) / self.length).clamp(0.0, 1.0);
-        self.strength * s * s
-    }
+    pub stats: RunStatistics,
+    pub(crate) workspace: Workspace,
 }
 
 impl Simulation {
@@ -179,8 +144,6 @@ impl Simulation {
             domain_min,
             domain_max,
         } = build_scene(case, &params);
-        let g = vec2(case.fluid.gravity).norm();
-        let height = (domain_max.y - domain_min.y).max(domain_max.x - domain_min.x);
         let mut fastest: Real = particles
             .velocity
             .iter()
@@ -189,37 +152,23 @@ impl Simulation {
         for w in &walls {
             fastest = fastest.max(w.state.velocity.norm());
         }
-        let speed_limit = case
-            .scheme
-            .max_speed
-            .unwrap_or(10.0 * ((2.0 * g * height).sqrt() + fastest) + 1.0);
-        let n_walls = walls.len();
-        let particle_count = particles.len();
-        let mut sim = Self {
+        let config = Config::new(
+            case,
             params,
-            scheme: case.scheme.clone().resolved(),
+            (domain_min, domain_max),
+            particles.len(),
+            fastest,
+        );
+        let n_walls = walls.len();
+        let mut sim = Self {
+            config,
             particles,
             walls,
             time: 0.0,
             steps: 0,
-            domain_min,
-            domain_max,
-            removed: 0,
-            cfl: case.time.cfl,
-            max_dt: case.time.max_dt,
-            speed_limit,
-            runaways: 0,
-            runaway_budget: (case.scheme.runaway_allowance.max(0.0) * particle_count as Real)
-                .floor() as usize,
-            first_runaway: None,
-            damping: case.damping_zones.iter().map(DampingLayer::new).collect(),
             loads: vec![WallLoad::default(); n_walls],
-            stage_times: StageTimes::default(),
-            total_solver_iterations: 0,
-            neighbors: NeighborList::default(),
-            contacts: WallContacts::default(),
-            scratch: Default::default(),
-            solver_cache: Default::default(),
+            stats: RunStatistics::default(),
+            workspace: Workspace::default(),
         };
         sim.initialize();
         sim
@@ -233,14 +182,14 @@ impl Simulation {
     /// How the pressure preconditioners of the steps so far were obtained (built or
     /// reused AMG hierarchies).
     pub fn solver_reuse_counts(&self) -> super::pressure::ReuseCounts {
-        self.solver_cache.counts()
+        self.workspace.solver_cache.counts()
     }
 
     /// Kinetic and potential energy of the fluid per unit depth (J/m): sum of m |u|²/2
     /// and of -m g·x (zero potential at the origin).
     pub fn fluid_energy(&self) -> (Real, Real) {
-        let m = self.params.particle_mass;
-        let g = vec2(self.params.gravity);
+        let m = self.config.params.particle_mass;
+        let g = vec2(self.config.params.gravity);
         let p = &self.particles;
         let kinetic: Real = p.velocity.iter().map(|u| u.norm_squared()).sum::<Real>() * 0.5 * m;
         let potential: Real = -p.position.iter().map(|x| g.dot(x)).sum::<Real>() * m;
@@ -262,26 +211,26 @@ impl Simulation {
         for w in &self.walls {
             u = u.max(w.state.velocity.norm());
         }
-        let l0 = self.params.l0;
-        let mut dt = self.max_dt;
+        let l0 = self.config.params.l0;
+        let mut dt = self.config.control.max_dt;
         if u > 0.0 {
-            dt = dt.min(self.cfl * l0 / u);
+            dt = dt.min(self.config.control.cfl * l0 / u);
         }
-        if self.params.viscosity > 0.0 {
+        if self.config.params.viscosity > 0.0 {
             // explicit diffusion: the strain-rate form's largest eigenvalue is (d + 2)/d
             // times the Laplacian's (it weights r̂ r̂ by d + 2 where the Laplacian has 1)
-            let form = match self.scheme.viscosity {
+            let form = match self.config.method.viscosity {
                 crate::case::ViscosityKind::Laplacian => 1.0,
                 crate::case::ViscosityKind::StrainRate => {
                     super::params::DIM / (super::params::DIM + 2.0)
                 }
             };
-            dt = dt.min(0.2 * form * l0 * l0 / self.params.viscosity);
+            dt = dt.min(0.2 * form * l0 * l0 / self.config.params.viscosity);
         }
-        let g = vec2(self.params.gravity).norm();
+        let g = vec2(self.config.params.gravity).norm();
         if g > 0.0 {
             // a particle starting from rest should not fall more than cfl * l0 in a step
-            dt = dt.min((2.0 * self.cfl * l0 / g).sqrt());
+            dt = dt.min((2.0 * self.config.control.cfl * l0 / g).sqrt());
         }
         dt
     }
@@ -293,6 +242,6 @@ impl Simulation {
 
     /// Each particle's wall contacts of the last step (diagnostics).
     pub fn wall_contacts(&self) -> &crate::engine::walls::WallContacts {
-        &self.contacts
+        &self.workspace.contacts
     }
 }

@@ -1,7 +1,23 @@
 //! Buffers the step reuses from one step to the next (no allocation at a steady size).
 
 use super::math::{Real, Vec2};
-use super::pressure::CsrMatrix;
+use super::neighbors::NeighborList;
+use super::pressure::{CsrMatrix, SolverCache};
+use super::walls::WallContacts;
+
+/// What the step derives from the state and keeps for the next step, and its buffers.
+#[derive(Debug, Default)]
+pub(crate) struct Workspace {
+    /// Neighbours and wall contacts at the last predicted positions (the next step's
+    /// explicit stage reads them).
+    pub(crate) neighbors: NeighborList,
+    pub(crate) contacts: WallContacts,
+    pub(crate) scratch: Scratch,
+    /// The pressure preconditioner carried from step to step (the AMG hierarchy, see
+    /// engine::pressure::reuse). It changes the iterates of later solves (within the
+    /// solver tolerance), so it lives with the simulation it serves.
+    pub(crate) solver_cache: SolverCache,
+}
 
 /// Buffers reused from step to step.
 #[derive(Debug, Default)]

@@ -13,8 +13,8 @@ pub struct ProbePoint {
 
 /// Pressure at every probe (0 where no particle is within r_e: a dry probe).
 pub fn sample(sim: &Simulation, probes: &[ProbePoint]) -> Vec<(String, Real)> {
-    let re = sim.params.re;
-    let kind = sim.scheme.kernel;
+    let re = sim.config.params.re;
+    let kind = sim.config.method.kernel;
     probes
         .iter()
         .map(|probe| {
@@ -22,7 +22,7 @@ pub fn sample(sim: &Simulation, probes: &[ProbePoint]) -> Vec<(String, Real)> {
             for (x, p) in sim.particles.position.iter().zip(&sim.particles.pressure) {
                 let r = (x - probe.position).norm();
                 if r < re {
-                    let w = weight(kind, r.max(0.05 * sim.params.l0), re);
+                    let w = weight(kind, r.max(0.05 * sim.config.params.l0), re);
                     sw += w;
                     swp += w * p;
                 }

@@ -70,7 +70,7 @@ impl SnapshotWriter {
             velocity: &p.velocity,
             pressure: &p.pressure,
             number_density: &p.number_density,
-            n0: Some(sim.params.n0),
+            n0: Some(sim.config.params.n0),
             free_surface: &p.free_surface,
         };
         let file = snapshot_file_name(sim.steps);

@@ -46,7 +46,7 @@ fn flat_wall_z(d: Real, l0: Real, re: Real) -> Real {
 /// The scene of `case`, its (first) body placed, and the wall sums' radii and weights.
 fn held_body(case: &Case) -> (Simulation, PlacedWall, WallKernels, Weights) {
     let sim = Simulation::new(case);
-    let prm = &sim.params;
+    let prm = &sim.config.params;
     let k = sim.walls.iter().position(|w| w.body.is_some()).unwrap();
     let placed = PlacedWall::new(&sim.walls[k], sim.walls[k].state);
     let kernels = WallKernels {
@@ -103,7 +103,7 @@ fn apex_number_density(radius: Real) {
         ],
     );
     let (sim, placed, kernels, weights) = held_body(&case);
-    let prm = &sim.params;
+    let prm = &sim.config.params;
     let apex = placed.state.position;
     let edges = &placed.loop_edges;
     // the right face leaves the apex at 30° (deadrise); its outward normal points down-right
@@ -184,7 +184,7 @@ fn particle_near_convex_box_corner_gets_full_lattice_number_density() {
         ],
     );
     let (sim, placed, kernels, weights) = held_body(&case);
-    let prm = &sim.params;
+    let prm = &sim.config.params;
     let corner = Vec2::new(-0.2, -0.35);
     let x = &sim.particles.position;
     let (mut worst, mut worst_flat, mut checked) = (0.0_f64, 0.0_f64, 0);

@@ -402,7 +402,7 @@ fn engine_with_reuse_matches_rebuilding_every_step() {
         (
             loads,
             sim.solver_reuse_counts(),
-            sim.total_solver_iterations,
+            sim.stats.total_solver_iterations,
         )
     };
     let (every, counts_every, its_every) = run(1);

@@ -119,7 +119,7 @@ fn a_lone_runaway_particle_is_removed_and_the_tank_stays_hydrostatic() {
             load.push(sim.loads[0].force.y);
         }
     }
-    assert_eq!(sim.runaways, 1);
+    assert_eq!(sim.stats.runaways, 1);
     assert_eq!(sim.particle_count(), 1250);
     let first = sim
         .first_runaway

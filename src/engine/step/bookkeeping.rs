@@ -8,7 +8,7 @@ use crate::engine::walls::WallContacts;
 use rayon::prelude::*;
 
 pub(super) fn remove_particles_outside_domain(sim: &mut Simulation) -> usize {
-    let (lo, hi) = (sim.domain_min, sim.domain_max);
+    let (lo, hi) = (sim.config.control.domain_min, sim.config.control.domain_max);
     let keep: Vec<bool> = sim
         .particles
         .position
@@ -23,21 +23,21 @@ pub(super) fn remove_particles_outside_domain(sim: &mut Simulation) -> usize {
 /// run on the first. A non-finite velocity is never removed: that is a diverged step.
 pub(super) fn remove_runaways(sim: &mut Simulation) -> usize {
     // no allowance left: nothing to scan for, check_health reports the first runaway
-    if sim.runaways >= sim.runaway_budget {
+    if sim.stats.runaways >= sim.config.control.runaway_budget {
         return 0;
     }
-    let limit = sim.speed_limit;
+    let limit = sim.config.control.speed_limit;
     let fast: Vec<usize> = (0..sim.particles.len())
         .into_par_iter()
         .filter(|&i| sim.particles.velocity[i].norm() > limit)
         .collect();
-    if fast.is_empty() || sim.runaways + fast.len() > sim.runaway_budget {
+    if fast.is_empty() || sim.stats.runaways + fast.len() > sim.config.control.runaway_budget {
         return 0;
     }
-    if sim.first_runaway.is_none() {
+    if sim.stats.first_runaway.is_none() {
         let i = fast[0];
         let (x, u) = (sim.particles.position[i], sim.particles.velocity[i]);
-        sim.first_runaway = Some(format!(
+        sim.stats.first_runaway = Some(format!(
             "step {}, t = {:.6} s: particle {i} at ({:.4}, {:.4}) reached {:.3} m/s (limit {limit:.3} m/s)",
             sim.steps,
             sim.time,
@@ -46,7 +46,7 @@ pub(super) fn remove_runaways(sim: &mut Simulation) -> usize {
             u.norm()
         ));
     }
-    sim.runaways += fast.len();
+    sim.stats.runaways += fast.len();
     let mut keep = vec![true; sim.particles.len()];
     for i in fast {
         keep[i] = false;
@@ -54,28 +54,28 @@ pub(super) fn remove_runaways(sim: &mut Simulation) -> usize {
     remove_particles(sim, &keep)
 }
 
-/// Keep the particles flagged in `keep` (counted in `sim.removed`), with their lists.
+/// Keep the particles flagged in `keep` (counted in `sim.stats.removed`), with their lists.
 pub(super) fn remove_particles(sim: &mut Simulation, keep: &[bool]) -> usize {
     let removed = keep.iter().filter(|k| !**k).count();
     if removed > 0 {
         sim.particles.retain(&keep);
-        sim.removed += removed;
+        sim.stats.removed += removed;
         // the particles are renumbered: the AMG hierarchy's row keys mean nothing now
-        sim.solver_cache.invalidate();
+        sim.workspace.solver_cache.invalidate();
         // lists index particles: rebuild them for the next step's explicit stage
-        sim.neighbors = neighbor_list(&sim.params, &sim.particles.position);
+        sim.workspace.neighbors = neighbor_list(&sim.config.params, &sim.particles.position);
         let keep_contacts = {
             let mut offsets = vec![0u32];
             let mut contacts = Vec::new();
             for (i, k) in keep.iter().enumerate() {
                 if *k {
-                    contacts.extend_from_slice(sim.contacts.of(i));
+                    contacts.extend_from_slice(sim.workspace.contacts.of(i));
                     offsets.push(contacts.len() as u32);
                 }
             }
             WallContacts { offsets, contacts }
         };
-        sim.contacts = keep_contacts;
+        sim.workspace.contacts = keep_contacts;
     }
     removed
 }
@@ -110,21 +110,21 @@ pub(super) fn check_health(sim: &Simulation) -> Result<Real, SimError> {
             return Err(fail(i, "non-finite pressure".into()));
         }
         let s = u.norm();
-        if s > sim.speed_limit {
+        if s > sim.config.control.speed_limit {
             return Err(fail(
                 i,
                 format!(
                     "runaway velocity {s:.3} m/s (limit {:.3} m/s)",
-                    sim.speed_limit
+                    sim.config.control.speed_limit
                 ),
             ));
         }
-        if p.number_density[i] > 4.0 * sim.params.n0 {
+        if p.number_density[i] > 4.0 * sim.config.params.n0 {
             return Err(fail(
                 i,
                 format!(
                     "particle number density collapsed to {:.2} n0",
-                    p.number_density[i] / sim.params.n0
+                    p.number_density[i] / sim.config.params.n0
                 ),
             ));
         }

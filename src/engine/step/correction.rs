@@ -19,7 +19,7 @@ pub(super) fn correct_velocity_and_position<K: Kernel>(
     dt: Real,
     loads: &mut [WallLoad],
 ) {
-    let prm = &sim.params;
+    let prm = &sim.config.params;
     let (re, rho, c_grad, m, n0) = (
         prm.re,
         prm.density,
@@ -27,9 +27,9 @@ pub(super) fn correct_velocity_and_position<K: Kernel>(
         prm.particle_mass,
         prm.n0,
     );
-    let x = &sim.scratch.x_star;
+    let x = &sim.workspace.scratch.x_star;
     let p = &sim.particles.pressure;
-    let nb = &sim.neighbors;
+    let nb = &sim.workspace.neighbors;
     let n = x.len();
     let cloud = Cloud::new(x, nb, re);
     // minimum pressure over each neighbourhood (stability of the classic gradient)
@@ -37,17 +37,17 @@ pub(super) fn correct_velocity_and_position<K: Kernel>(
         .into_par_iter()
         .map(|i| minimum_over_neighbourhood(&cloud, p, i))
         .collect();
-    let form = sim.scheme.gradient;
+    let form = sim.config.method.gradient;
     let gradient = PressureGradient {
         kind: form,
         classic: c_grad,
         n0,
         dim: DIM,
-        stabilization: sim.scheme.gradient_stabilization,
-        close: sim.scheme.stabilization_distance * sim.params.l0,
+        stabilization: sim.config.method.stabilization.strength,
+        close: sim.config.method.stabilization.distance * sim.config.params.l0,
     };
-    let contacts = &sim.contacts;
-    let neumann = &sim.scratch.neumann;
+    let contacts = &sim.workspace.contacts;
+    let neumann = &sim.workspace.scratch.neumann;
     // Anisotropic and least-squares gradients (paper 000 eq. 28 and LSMPS) away from
     // walls, in the linear form Σ g_ij (p_j - p_i) like GC; particles with wall contacts
     // use GC, whose moment matrix includes the virtual wall points.
@@ -67,7 +67,7 @@ pub(super) fn correct_velocity_and_position<K: Kernel>(
             pressure_gradient::<K>(&gradient, &cloud, p, &p_min, i, walls)
         })
         .collect();
-    if sim.scheme.wall_load == WallLoadKind::PressureIntegral {
+    if sim.config.method.wall_load == WallLoadKind::PressureIntegral {
         let w = |d: Real| K::w(d, re);
         let integral = pressure_loads(
             x,
@@ -88,7 +88,7 @@ pub(super) fn correct_velocity_and_position<K: Kernel>(
     // Loads: the conservative (antisymmetric) wall term, virtual pressure p_k = p_i + c·r:
     // Σ_k (p_i + p_k) r w / r² — a pressure integral over the wall through the MPS wall
     // operator, whose sum over a still tank is the fluid's weight.
-    let reaction = sim.scheme.wall_load == WallLoadKind::Reaction;
+    let reaction = sim.config.method.wall_load == WallLoadKind::Reaction;
     for i in (0..n).filter(|_| reaction) {
         let base = contacts.offsets[i] as usize;
         for (k, c) in contacts.of(i).iter().enumerate() {

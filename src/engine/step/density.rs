@@ -19,12 +19,16 @@ pub(super) fn neighbor_list(params: &MpsParameters, x: &[Vec2]) -> NeighborList 
 
 /// n and ∇·u of the current state (before the first step).
 pub(super) fn initial_number_density_and_divergence<K: Kernel>(sim: &mut Simulation) {
-    let cloud = Cloud::new(&sim.particles.position, &sim.neighbors, sim.params.re);
-    let n = number_density::<K>(&cloud, &sim.contacts);
+    let cloud = Cloud::new(
+        &sim.particles.position,
+        &sim.workspace.neighbors,
+        sim.config.params.re,
+    );
+    let n = number_density::<K>(&cloud, &sim.workspace.contacts);
     let div = hs_divergence::<K>(
         &cloud,
         &sim.particles.velocity,
-        sim.params.divergence_coefficient,
+        sim.config.params.divergence_coefficient,
     );
     sim.particles.number_density = n;
     sim.particles.number_density_rate = div;
@@ -40,8 +44,12 @@ fn number_density<K: Kernel>(cloud: &Cloud, contacts: &WallContacts) -> Vec<Real
 
 /// n* at the predicted positions.
 pub(super) fn compute_number_density<K: Kernel>(sim: &mut Simulation) {
-    let cloud = Cloud::new(&sim.scratch.x_star, &sim.neighbors, sim.params.re);
-    sim.scratch.n_star = number_density::<K>(&cloud, &sim.contacts);
+    let cloud = Cloud::new(
+        &sim.workspace.scratch.x_star,
+        &sim.workspace.neighbors,
+        sim.config.params.re,
+    );
+    sim.workspace.scratch.n_star = number_density::<K>(&cloud, &sim.workspace.contacts);
 }
 
 /// The HS divergence of `u` at the positions of `cloud`, with the walls' virtual points
@@ -52,10 +60,12 @@ pub(super) fn divergence<K: Kernel>(
     u: &[Vec2],
     u_wall_relative: &[Vec2],
 ) -> Vec<Real> {
-    let c = sim.params.divergence_coefficient;
+    let c = sim.config.params.divergence_coefficient;
     let mut div = hs_divergence::<K>(cloud, u, c);
-    if sim.scheme.wall_kinematics == WallKinematics::Source {
-        sim.contacts.add_divergence(&mut div, u_wall_relative, c);
+    if sim.config.method.wall_kinematics == WallKinematics::Source {
+        sim.workspace
+            .contacts
+            .add_divergence(&mut div, u_wall_relative, c);
     }
     div
 }
@@ -63,9 +73,9 @@ pub(super) fn divergence<K: Kernel>(
 /// n and ∇·u at the end of the step, for the error-compensating source: the walls' share
 /// of n carried from x* to the corrected positions to first order.
 pub(super) fn update_number_density_and_divergence<K: Kernel>(sim: &mut Simulation) {
-    let (x, xs) = (&sim.particles.position, &sim.scratch.x_star);
-    let cloud = Cloud::new(x, &sim.neighbors, sim.params.re);
-    let contacts = &sim.contacts;
+    let (x, xs) = (&sim.particles.position, &sim.workspace.scratch.x_star);
+    let cloud = Cloud::new(x, &sim.workspace.neighbors, sim.config.params.re);
+    let contacts = &sim.workspace.contacts;
     let n: Vec<Real> = (0..x.len())
         .into_par_iter()
         .map(|i| {

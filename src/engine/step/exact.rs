@@ -15,11 +15,10 @@
 //! of a thin sheet at a jet root blew the wedge up within 11 ms. The approximate
 //! solution is the start, GMRES corrects it, preconditioned by the Laplacian's AMG cycle.
 //!
-//! What it changes (measured in session 10, details on `case::Projection::Exact`): the
-//! plate's added mass comes within 1.2 % at 10 / 5 / 2.5 mm with a blend of 0.05 and
-//! within 2.1 % with the default 0.1, but the wedge's slamming
-//! force does not fall (it rises at 5 mm, with more per-step noise), and blends below
-//! 0.1 let the floating box go unstable.
+//! What it changes (details on `case::Projection::Exact`): the plate's added mass
+//! comes within 2.1 % of Wagner's at 10 / 5 / 2.5 mm with the default blend 0.1, but the
+//! wedge's slamming force does not fall, and blends below 0.1 let the floating box go
+//! unstable.
 //! A run costs 2.4-2.7 times the approximate one: the GMRES iterations (about 14 a step
 //! at 1 cm) each apply the gradient, the divergence and an AMG cycle.
 
@@ -50,12 +49,12 @@ struct Gradient {
 
 impl Gradient {
     fn new<K: Kernel>(sim: &Simulation) -> Self {
-        let prm = &sim.params;
+        let prm = &sim.config.params;
         let (re, n0, c_grad) = (prm.re, prm.n0, prm.gradient_coefficient);
-        let x = &sim.scratch.x_star;
-        let nb = &sim.neighbors;
-        let contacts = &sim.contacts;
-        let neumann = &sim.scratch.neumann;
+        let x = &sim.workspace.scratch.x_star;
+        let nb = &sim.workspace.neighbors;
+        let contacts = &sim.workspace.contacts;
+        let neumann = &sim.workspace.scratch.neumann;
         let rows: Vec<(Vec<(u32, Vec2)>, Vec2)> = (0..x.len())
             .into_par_iter()
             .map(|i| {
@@ -121,21 +120,22 @@ impl Gradient {
 }
 
 /// Correct the pressure solved with the HL Laplacian (unknown rows in
-/// `sim.scratch.solution`, not yet clipped) so that the rows of particles away from the
+/// `sim.workspace.scratch.solution`, not yet clipped) so that the rows of particles away from the
 /// free surface carry the exact projection; writes `sim.particles.pressure`. Returns the
 /// GMRES iterations.
 pub(super) fn correct_to_exact_projection<K: Kernel>(
     sim: &mut Simulation,
+    blend: Real,
     dt: Real,
 ) -> Result<usize, SimError> {
     // the Laplacian's hierarchy preconditions; taken out while `sim` is borrowed
-    let mut cache = std::mem::take(&mut sim.solver_cache);
-    let prm = &sim.params;
+    let mut cache = std::mem::take(&mut sim.workspace.solver_cache);
+    let prm = &sim.config.params;
     let (rho, re, c_div) = (prm.density, prm.re, prm.divergence_coefficient);
-    let s = &sim.scratch;
+    let s = &sim.workspace.scratch;
     let surface = &sim.particles.free_surface;
-    let nb = &sim.neighbors;
-    let contacts = &sim.contacts;
+    let nb = &sim.workspace.neighbors;
+    let contacts = &sim.workspace.contacts;
     let x = &s.x_star;
     let u_star = &sim.particles.velocity;
     let rows = s.particle_of.len();
@@ -171,7 +171,7 @@ pub(super) fn correct_to_exact_projection<K: Kernel>(
                 .collect()
         })
         .collect();
-    let theta = sim.scheme.exact_projection_blend;
+    let theta = blend;
     // F(p): the exact rows' source evaluated at the corrected velocity, the other rows'
     // Laplacian residual; affine in p, `homogeneous` is its linear part
     let residual = |unknowns: &[Real], homogeneous: bool, out: &mut [Real]| {
@@ -251,18 +251,18 @@ pub(super) fn correct_to_exact_projection<K: Kernel>(
         reference,
         SolveParams {
             tolerance: EXACT_TOLERANCE,
-            max_iterations: sim.scheme.solver_max_iterations,
+            max_iterations: sim.config.method.solver.max_iterations,
         },
         RESTART,
     );
-    sim.solver_cache = cache;
+    sim.workspace.solver_cache = cache;
     let info = info.map_err(|e| SimError::Solver {
         step: sim.steps + 1,
         time: sim.time,
         reason: format!("exact projection: {e}"),
     })?;
-    let clip = sim.scheme.clip_negative_pressure;
-    let s = &mut sim.scratch;
+    let clip = sim.config.method.clip_negative_pressure;
+    let s = &mut sim.workspace.scratch;
     let p = &mut sim.particles.pressure;
     s.exact_correction.clear();
     s.exact_correction.resize(p.len(), 0.0);

@@ -16,9 +16,12 @@ pub(super) fn apply_explicit_forces<K: Kernel>(
     dt: Real,
     loads: &mut [WallLoad],
 ) {
-    let g = vec2(sim.params.gravity);
-    let nu = sim.params.viscosity;
-    sim.scratch.u_start.clone_from(&sim.particles.velocity);
+    let g = vec2(sim.config.params.gravity);
+    let nu = sim.config.params.viscosity;
+    sim.workspace
+        .scratch
+        .u_start
+        .clone_from(&sim.particles.velocity);
     if nu <= 0.0 {
         sim.particles
             .velocity
@@ -26,11 +29,11 @@ pub(super) fn apply_explicit_forces<K: Kernel>(
             .for_each(|u| *u += g * dt);
         return;
     }
-    let c = sim.params.laplacian_coefficient;
+    let c = sim.config.params.laplacian_coefficient;
     let (x, u) = (&sim.particles.position, &sim.particles.velocity);
-    let (nb, contacts) = (&sim.neighbors, &sim.contacts);
+    let (nb, contacts) = (&sim.workspace.neighbors, &sim.workspace.contacts);
     let free_slip: Vec<bool> = sim.walls.iter().map(|w| w.free_slip).collect();
-    let form = sim.scheme.viscosity;
+    let form = sim.config.method.viscosity;
     // a particle created after the last neighbour search has no list yet
     let accel: Vec<(Vec2, Vec2)> = (0..x.len())
         .into_par_iter()
@@ -67,15 +70,16 @@ pub(super) fn apply_explicit_forces<K: Kernel>(
             (g + (lap + wall) * (nu * c), wall * (nu * c))
         })
         .collect();
-    let m = sim.params.particle_mass;
+    let m = sim.config.params.particle_mass;
     for (i, (a, _)) in accel.iter().enumerate() {
         sim.particles.velocity[i] += a * dt;
     }
     for (i, (_, aw)) in accel.iter().enumerate() {
-        if i < sim.neighbors.len() {
-            for ct in sim.contacts.of(i) {
+        if i < sim.workspace.neighbors.len() {
+            for ct in sim.workspace.contacts.of(i) {
                 // split the wall acceleration between contacts by their Laplacian weight
                 let total: Real = sim
+                    .workspace
                     .contacts
                     .of(i)
                     .iter()
@@ -92,7 +96,7 @@ pub(super) fn apply_explicit_forces<K: Kernel>(
 
 pub(super) fn predict_positions(sim: &mut Simulation, dt: Real) {
     let p = &sim.particles;
-    sim.scratch.x_star = p
+    sim.workspace.scratch.x_star = p
         .position
         .par_iter()
         .zip(p.velocity.par_iter())

@@ -8,13 +8,21 @@ use rayon::prelude::*;
 /// Free surface: n* < beta n0, confirmed by a one-sided neighbourhood
 /// (|Σ w r/r²| l0 / n above `surface_asymmetry`); below 0.8 n0 always.
 pub(super) fn detect_free_surface<K: Kernel>(sim: &mut Simulation) {
-    let (x, nb, contacts) = (&sim.scratch.x_star, &sim.neighbors, &sim.contacts);
-    let (n0, re, l0) = (sim.params.n0, sim.params.re, sim.params.l0);
-    let beta = sim.scheme.surface_threshold;
-    let asym_limit = sim.scheme.surface_asymmetry;
-    let n_star = &sim.scratch.n_star;
-    let offset = sim.scheme.surface_offset;
-    let rho_g = vec2(sim.params.gravity) * sim.params.density;
+    let (x, nb, contacts) = (
+        &sim.workspace.scratch.x_star,
+        &sim.workspace.neighbors,
+        &sim.workspace.contacts,
+    );
+    let (n0, re, l0) = (
+        sim.config.params.n0,
+        sim.config.params.re,
+        sim.config.params.l0,
+    );
+    let beta = sim.config.method.free_surface.threshold;
+    let asym_limit = sim.config.method.free_surface.asymmetry;
+    let n_star = &sim.workspace.scratch.n_star;
+    let offset = sim.config.method.free_surface.offset;
+    let rho_g = vec2(sim.config.params.gravity) * sim.config.params.density;
     // (is surface, Dirichlet value): the surface lies half a spacing beyond the particle,
     // so its hydrostatic pressure is rho g·m̂ l0/2 (m̂ the inward normal). Gravity only:
     // an estimate from the previous pressure gradient feeds back into itself (measured:
@@ -52,7 +60,7 @@ pub(super) fn detect_free_surface<K: Kernel>(sim: &mut Simulation) {
         })
         .collect();
     sim.particles.free_surface = flags.iter().map(|f| f.0).collect();
-    sim.scratch.surface_pressure = flags.iter().map(|f| f.1).collect();
+    sim.workspace.scratch.surface_pressure = flags.iter().map(|f| f.1).collect();
     release_isolated_clusters(sim);
 }
 
@@ -77,10 +85,14 @@ pub(super) const ENCLOSED_PAIR: usize = 2;
 /// starts only from particles touching a wall with fewer than half the lattice's
 /// neighbours, and stops past the limit, so it costs nothing in the bulk.
 pub(super) fn release_isolated_clusters(sim: &mut Simulation) {
-    let (x, nb, contacts) = (&sim.scratch.x_star, &sim.neighbors, &sim.contacts);
+    let (x, nb, contacts) = (
+        &sim.workspace.scratch.x_star,
+        &sim.workspace.neighbors,
+        &sim.workspace.contacts,
+    );
     let surface = &sim.particles.free_surface;
-    let (re, re_lap) = (sim.params.re, sim.params.re_lap);
-    let lattice_neighbours = sim.params.lattice.neighbours;
+    let (re, re_lap) = (sim.config.params.re, sim.config.params.re_lap);
+    let lattice_neighbours = sim.config.params.lattice.neighbours;
     let seeds: Vec<usize> = (0..x.len().min(nb.len()))
         .into_par_iter()
         .filter(|&i| {
@@ -125,7 +137,7 @@ pub(super) fn release_isolated_clusters(sim: &mut Simulation) {
     }
     for i in released {
         sim.particles.free_surface[i] = true;
-        sim.scratch.surface_pressure[i] = 0.0;
+        sim.workspace.scratch.surface_pressure[i] = 0.0;
     }
 }
 

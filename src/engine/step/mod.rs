@@ -32,11 +32,12 @@ mod pressure_equation;
 mod spacing;
 mod walls;
 
+use super::config::Projection;
 use super::kernel::Kernel;
 use super::math::Real;
 use super::simulation::{SimError, Simulation, StageTimes, StepInfo, WallLoad};
 use super::walls::WallContacts;
-use crate::case::{Projection, WallLoadKind};
+use crate::case::WallLoadKind;
 use crate::with_kernel;
 use std::time::Instant;
 use walls::{placed_walls, wall_kernels, KernelWeights};
@@ -45,13 +46,13 @@ impl Simulation {
     /// Neighbours, wall contacts, number density and divergence of the current state: call
     /// it after moving particles by hand (as the perturbed-lattice stress scene does).
     pub fn initialize(&mut self) {
-        with_kernel!(self.scheme.kernel, K => initialize::<K>(self))
+        with_kernel!(self.config.method.kernel, K => initialize::<K>(self))
     }
 
     /// Advance by `dt`. Body wall states must hold the pose and velocity at the start of
     /// the step; they are advanced kinematically (the coupling may overwrite them after).
     pub fn step(&mut self, dt: Real) -> Result<StepInfo, SimError> {
-        with_kernel!(self.scheme.kernel, K => step::<K>(self, dt))
+        with_kernel!(self.config.method.kernel, K => step::<K>(self, dt))
     }
 }
 
@@ -64,11 +65,12 @@ fn timed<T>(total: &mut f64, stage: impl FnOnce() -> T) -> T {
 }
 
 fn initialize<K: Kernel>(sim: &mut Simulation) {
-    sim.neighbors = density::neighbor_list(&sim.params, &sim.particles.position);
+    sim.workspace.neighbors = density::neighbor_list(&sim.config.params, &sim.particles.position);
     let walls = placed_walls(sim, 0.0);
     let weights = KernelWeights::<K>::new(sim);
     let kernels = wall_kernels(sim);
-    sim.contacts = WallContacts::build(&sim.particles.position, &walls, &kernels, &weights);
+    sim.workspace.contacts =
+        WallContacts::build(&sim.particles.position, &walls, &kernels, &weights);
     density::initial_number_density_and_divergence::<K>(sim);
 }
 
@@ -86,13 +88,15 @@ fn step<K: Kernel>(sim: &mut Simulation, dt: Real) -> Result<StepInfo, SimError>
     });
     // neighbours at x* (cell grid, counting sort)
     timed(&mut times.neighbors, || {
-        sim.neighbors = density::neighbor_list(&sim.params, &sim.scratch.x_star);
+        sim.workspace.neighbors =
+            density::neighbor_list(&sim.config.params, &sim.workspace.scratch.x_star);
     });
     // the walls at their predicted pose and each particle's contacts with them
     let walls = timed(&mut times.walls, || {
         let walls = placed_walls(sim, dt);
         let kernels = wall_kernels(sim);
-        sim.contacts = WallContacts::build(&sim.scratch.x_star, &walls, &kernels, &weights);
+        sim.workspace.contacts =
+            WallContacts::build(&sim.workspace.scratch.x_star, &walls, &kernels, &weights);
         walls
     });
     timed(&mut times.number_density, || {
@@ -109,8 +113,8 @@ fn step<K: Kernel>(sim: &mut Simulation, dt: Real) -> Result<StepInfo, SimError>
     });
     let (iterations, residual) = timed(&mut times.solve, || -> Result<_, SimError> {
         let (mut iterations, residual) = pressure_equation::solve_pressure(sim)?;
-        if sim.scheme.projection == Projection::Exact {
-            iterations += exact::correct_to_exact_projection::<K>(sim, dt)?;
+        if let Projection::Exact { blend } = sim.config.method.projection {
+            iterations += exact::correct_to_exact_projection::<K>(sim, blend, dt)?;
         }
         Ok((iterations, residual))
     })?;
@@ -121,37 +125,37 @@ fn step<K: Kernel>(sim: &mut Simulation, dt: Real) -> Result<StepInfo, SimError>
     });
     timed(&mut times.spacing, || {
         // the filter before the safety net, which must have the last word on wall approach
-        if sim.scheme.velocity_filter > 0.0 {
-            spacing::filter_velocity::<K>(sim);
+        if let Some(eps) = sim.config.method.velocity_filter {
+            spacing::filter_velocity::<K>(sim, eps);
         }
-        if !sim.damping.is_empty() {
+        if !sim.config.control.damping.is_empty() {
             spacing::absorb_waves(sim, dt);
         }
         spacing::keep_particles_apart(sim, &walls, dt, &mut loads);
-        if sim.scheme.shifting > 0.0 {
-            spacing::shift_particles::<K>(sim);
+        if let Some(a) = sim.config.method.shifting {
+            spacing::shift_particles::<K>(sim, a);
         }
     });
     let (removed, max_speed) = timed(&mut times.bookkeeping, || {
         // n and ∇·u at the end of the step, for the error-compensating source
         density::update_number_density_and_divergence::<K>(sim);
-        sim.loads = total_loads(loads, sim.scheme.wall_load);
+        sim.loads = total_loads(loads, sim.config.method.wall_load);
         for wall in &mut sim.walls {
             wall.state = wall.state.advanced(dt);
         }
         sim.time += dt;
         sim.steps += 1;
-        sim.total_solver_iterations += iterations as u64;
+        sim.stats.total_solver_iterations += iterations as u64;
         let removed =
             bookkeeping::remove_particles_outside_domain(sim) + bookkeeping::remove_runaways(sim);
         bookkeeping::check_health(sim).map(|max_speed| (removed, max_speed))
     })?;
-    sim.stage_times += times;
+    sim.stats.stage_times += times;
     Ok(StepInfo {
         dt,
         solver_iterations: iterations,
         solver_residual: residual,
-        unknowns: sim.scratch.matrix.n,
+        unknowns: sim.workspace.scratch.matrix.n,
         max_speed,
         removed,
     })

@@ -3,7 +3,8 @@
 
 use super::density::divergence;
 use super::walls::KernelWeights;
-use crate::case::{LaplacianKind, Projection, SourceKind, WallKinematics};
+use crate::case::{LaplacianKind, WallKinematics};
+use crate::engine::config::{Projection, Source};
 use crate::engine::kernel::Kernel;
 use crate::engine::math::{vec2, Real, Vec2};
 use crate::engine::operators::{for_each_lattice_coefficient, laplacian_row, Cloud, Normalisation};
@@ -18,10 +19,10 @@ use rayon::prelude::*;
 /// last step, (rho/dt) min(0, (u_i - u_w)·n) n (zero when the fluid followed the wall),
 /// so the virtual pressure behind the wall rises to push the particle back.
 pub(super) fn compute_neumann_gradients(sim: &mut Simulation, dt: Real) {
-    let rho = sim.params.density;
-    let g = vec2(sim.params.gravity);
-    let extrapolate = sim.scheme.source != SourceKind::Pnd;
-    let contacts = &sim.contacts;
+    let rho = sim.config.params.density;
+    let g = vec2(sim.config.params.gravity);
+    let extrapolate = sim.config.method.source != Source::Pnd;
+    let contacts = &sim.workspace.contacts;
     let base = |c: &WallContact| {
         if extrapolate {
             (g - c.wall_acceleration) * rho
@@ -29,12 +30,12 @@ pub(super) fn compute_neumann_gradients(sim: &mut Simulation, dt: Real) {
             Vec2::zeros()
         }
     };
-    if sim.scheme.wall_kinematics == WallKinematics::Source || !extrapolate {
-        sim.scratch.neumann = contacts.contacts.par_iter().map(base).collect();
+    if sim.config.method.wall_kinematics == WallKinematics::Source || !extrapolate {
+        sim.workspace.scratch.neumann = contacts.contacts.par_iter().map(base).collect();
         return;
     }
-    let u = &sim.scratch.u_start;
-    sim.scratch.neumann = (0..u.len())
+    let u = &sim.workspace.scratch.u_start;
+    sim.workspace.scratch.neumann = (0..u.len())
         .into_par_iter()
         .flat_map_iter(|i| {
             contacts.of(i).iter().map(move |c| {
@@ -51,10 +52,10 @@ pub(super) fn assemble_pressure_equation<K: Kernel>(
     dt: Real,
 ) {
     let np = sim.particles.len();
-    let p = &sim.params;
+    let p = &sim.config.params;
     let (rho, n0, c_lap) = (p.density, p.n0, p.laplacian_coefficient);
-    let x = &sim.scratch.x_star;
-    let nb = &sim.neighbors;
+    let x = &sim.workspace.scratch.x_star;
+    let nb = &sim.workspace.neighbors;
     let surface = &mut sim.particles.free_surface;
     // a particle with no Laplacian neighbour cannot be solved for: Dirichlet
     for i in 0..np {
@@ -65,14 +66,14 @@ pub(super) fn assemble_pressure_equation<K: Kernel>(
                 .all(|&j| weights.laplacian((x[j as usize] - x[i]).norm()) == 0.0)
         {
             surface[i] = true;
-            sim.scratch.surface_pressure[i] = 0.0;
+            sim.workspace.scratch.surface_pressure[i] = 0.0;
         }
     }
-    let dirichlet = &sim.scratch.surface_pressure;
+    let dirichlet = &sim.workspace.scratch.surface_pressure;
     let surface = &sim.particles.free_surface;
     // the previous step's index maps, refilled (no allocation at a steady size)
-    let mut unknown_of = std::mem::take(&mut sim.scratch.unknown_of);
-    let mut particle_of = std::mem::take(&mut sim.scratch.particle_of);
+    let mut unknown_of = std::mem::take(&mut sim.workspace.scratch.unknown_of);
+    let mut particle_of = std::mem::take(&mut sim.workspace.scratch.particle_of);
     unknown_of.clear();
     unknown_of.resize(np, u32::MAX);
     particle_of.clear();
@@ -87,55 +88,53 @@ pub(super) fn assemble_pressure_equation<K: Kernel>(
         sim,
         &Cloud::new(x, nb, p.re),
         &sim.particles.velocity,
-        &sim.scratch.u_start,
+        &sim.workspace.scratch.u_start,
     );
     let n_prev = &sim.particles.number_density;
     let div_prev = &sim.particles.number_density_rate;
-    let n_star = &sim.scratch.n_star;
-    let source = sim.scheme.source;
-    let gamma = sim.scheme.mixed_relaxation;
-    let source_of = |i: usize| -> Real {
-        match source {
-            SourceKind::Pnd => -rho / (dt * dt) * (n_star[i] - n0) / n0,
-            SourceKind::HigherOrder => rho / dt * div_star[i],
-            SourceKind::HigherOrderEcs => {
-                let dev = (n_prev[i] - n0) / n0;
-                let alpha = dev.abs();
-                let beta = (dt * div_prev[i]).abs();
-                rho / dt * (div_star[i] + alpha * div_prev[i]) - beta * rho / (dt * dt) * dev
-            }
-            SourceKind::Mixed => {
-                rho / dt * div_star[i] - gamma * rho / (dt * dt) * (n_prev[i] - n0) / n0
-            }
-        }
+    let n_star = &sim.workspace.scratch.n_star;
+    // the variant chosen once per step, each its own loop
+    let by_particle = |f: &(dyn Fn(usize) -> Real + Sync)| -> Vec<Real> {
+        (0..np).into_par_iter().map(f).collect()
     };
-    let source_extra: Vec<Real> = if sim.scheme.projection == Projection::Exact {
-        (0..np)
+    let source: Vec<Real> = match sim.config.method.source {
+        Source::Pnd => by_particle(&|i| -rho / (dt * dt) * (n_star[i] - n0) / n0),
+        Source::HigherOrder => by_particle(&|i| rho / dt * div_star[i]),
+        Source::HigherOrderEcs => by_particle(&|i| {
+            let dev = (n_prev[i] - n0) / n0;
+            let alpha = dev.abs();
+            let beta = (dt * div_prev[i]).abs();
+            rho / dt * (div_star[i] + alpha * div_prev[i]) - beta * rho / (dt * dt) * dev
+        }),
+        Source::Mixed { relaxation: gamma } => by_particle(&|i| {
+            rho / dt * div_star[i] - gamma * rho / (dt * dt) * (n_prev[i] - n0) / n0
+        }),
+    };
+    let source_extra: Vec<Real> = match sim.config.method.projection {
+        Projection::Exact { .. } => (0..np)
             .into_par_iter()
-            .map(|i| source_of(i) - rho / dt * div_star[i])
-            .collect()
-    } else {
-        Vec::new()
+            .map(|i| source[i] - rho / dt * div_star[i])
+            .collect(),
+        Projection::Approximate => Vec::new(),
     };
-    let compress = rho * sim.scheme.compressibility / (dt * dt);
+    let compress = rho * sim.config.method.compressibility / (dt * dt);
     let rho_g = vec2(p.gravity) * rho;
-    let well_balanced = sim.scheme.hydrostatic_ghosts;
-    let contacts = &sim.contacts;
+    let well_balanced = sim.config.method.hydrostatic_ghosts;
+    let contacts = &sim.workspace.contacts;
     // CHL, anisotropic and least-squares rows come from engine::operators for particles
     // away from walls; rows with wall contacts keep the tabulated (HL/classic) form,
     // which carries the Neumann condition, with the same lattice normalisation.
-    let kind = sim.scheme.laplacian;
+    let kind = sim.config.method.laplacian;
     let operator_rows = !kind.is_symmetric();
     let cloud = Cloud::new(x, nb, p.re_lap);
     let lattice = Normalisation::Reference(p.lattice_lap);
     // Imoto's second-order Laplacian is the classic one (paper 000 Theorem 3.1)
     let classic = matches!(kind, LaplacianKind::Classic | LaplacianKind::SecondOrder);
-    let neumann = &sim.scratch.neumann;
+    let neumann = &sim.workspace.scratch.neumann;
     let nu = particle_of.len();
     // the fill n*/n0 of each neighbourhood, floored (`Scheme::laplacian_fill_floor`);
     // none when disabled, so the default pays nothing per pair
-    let floor = sim.scheme.laplacian_fill_floor;
-    let fills: Option<Vec<Real>> = (floor < 1.0).then(|| {
+    let fills: Option<Vec<Real>> = sim.config.method.laplacian_fill_floor.map(|floor| {
         n_star
             .par_iter()
             .map(|n| (n / n0).clamp(floor, 1.0))
@@ -146,7 +145,7 @@ pub(super) fn assemble_pressure_equation<K: Kernel>(
     let row_entries = |row: usize, cols: &mut Vec<u32>, vals: &mut Vec<Real>| -> Real {
         let i = particle_of[row] as usize;
         let mut diag = compress;
-        let mut b = -source_of(i);
+        let mut b = -source[i];
         if operator_rows && contacts.of(i).is_empty() {
             for (j, c) in laplacian_row::<K>(kind, &cloud, lattice, i).off_diagonal {
                 diag += c;
@@ -222,7 +221,7 @@ pub(super) fn assemble_pressure_equation<K: Kernel>(
         })
         .collect();
     let nnz = parts.iter().map(|p| p.1.len()).sum();
-    let mut m = std::mem::take(&mut sim.scratch.matrix);
+    let mut m = std::mem::take(&mut sim.workspace.scratch.matrix);
     m.n = nu;
     m.row_ptr.clear();
     m.col.clear();
@@ -231,7 +230,7 @@ pub(super) fn assemble_pressure_equation<K: Kernel>(
     m.col.reserve(nnz);
     m.val.reserve(nnz);
     m.row_ptr.push(0);
-    let mut rhs = std::mem::take(&mut sim.scratch.rhs);
+    let mut rhs = std::mem::take(&mut sim.workspace.scratch.rhs);
     rhs.clear();
     let mut last = 0;
     for (lens, cols, vals, b) in parts {
@@ -244,29 +243,29 @@ pub(super) fn assemble_pressure_equation<K: Kernel>(
         rhs.extend_from_slice(&b);
     }
     // warm start from the last pressures
-    let mut solution = std::mem::take(&mut sim.scratch.solution);
+    let mut solution = std::mem::take(&mut sim.workspace.scratch.solution);
     solution.clear();
     solution.extend(
         particle_of
             .iter()
             .map(|&i| sim.particles.pressure[i as usize]),
     );
-    sim.scratch.solution = solution;
-    sim.scratch.matrix = m;
-    sim.scratch.rhs = rhs;
-    sim.scratch.unknown_of = unknown_of;
-    sim.scratch.particle_of = particle_of;
-    sim.scratch.source_extra = source_extra;
+    sim.workspace.scratch.solution = solution;
+    sim.workspace.scratch.matrix = m;
+    sim.workspace.scratch.rhs = rhs;
+    sim.workspace.scratch.unknown_of = unknown_of;
+    sim.workspace.scratch.particle_of = particle_of;
+    sim.workspace.scratch.source_extra = source_extra;
 }
 
 pub(super) fn solve_pressure(sim: &mut Simulation) -> Result<(usize, Real), SimError> {
     let params = SolveParams {
-        tolerance: sim.scheme.solver_tolerance,
-        max_iterations: sim.scheme.solver_max_iterations,
+        tolerance: sim.config.method.solver.tolerance,
+        max_iterations: sim.config.method.solver.max_iterations,
     };
-    let s = &mut sim.scratch;
+    let s = &mut sim.workspace.scratch;
     let policy = pressure::ReusePolicy {
-        rebuild_interval: sim.scheme.amg_rebuild_interval,
+        rebuild_interval: sim.config.method.solver.amg_rebuild_interval,
         // Keep, not Galerkin: recomputing R A P saved only a quarter of the setup
         // (dam break, 10k particles, interval 10: setup 10.3 vs 13.8 ms/step rebuilding
         // every step, against 2.1 ms/step when keeping) for the same iterations (14.0)
@@ -274,13 +273,13 @@ pub(super) fn solve_pressure(sim: &mut Simulation) -> Result<(usize, Real), SimE
     };
     // rows are keyed by particle, so a hierarchy survives changes of the unknown set
     let info = pressure::solve_reusing(
-        sim.scheme.solver,
+        sim.config.method.solver.kind,
         &s.matrix,
         &s.rhs,
         &mut s.solution,
         params,
         pressure::Reuse {
-            cache: &mut sim.solver_cache,
+            cache: &mut sim.workspace.solver_cache,
             keys: &s.particle_of,
             key_space: s.unknown_of.len(),
             policy,
@@ -291,7 +290,7 @@ pub(super) fn solve_pressure(sim: &mut Simulation) -> Result<(usize, Real), SimE
         time: sim.time,
         reason: e.to_string(),
     })?;
-    let clip = sim.scheme.clip_negative_pressure;
+    let clip = sim.config.method.clip_negative_pressure;
     let p = &mut sim.particles.pressure;
     p.copy_from_slice(&s.surface_pressure);
     for (row, &i) in s.particle_of.iter().enumerate() {

@@ -1,7 +1,7 @@
 //! Spacing control after the correction: velocity filter, sponge layers, the collision
 //! and wall-repulsion safety net, particle shifting.
 
-use crate::case::SpacingControl;
+use crate::engine::config::SpacingControl;
 use crate::engine::kernel::Kernel;
 use crate::engine::math::{Real, Vec2};
 use crate::engine::simulation::{Simulation, WallLoad};
@@ -16,16 +16,16 @@ pub(super) fn keep_particles_apart(
     dt: Real,
     loads: &mut [WallLoad],
 ) {
-    let l0 = sim.params.l0;
-    let e = sim.scheme.collision_restitution;
-    let m = sim.params.particle_mass;
+    let l0 = sim.config.params.l0;
+    let e = sim.config.method.restitution;
+    let m = sim.config.params.particle_mass;
     let n = sim.particles.len();
-    if sim.scheme.spacing_control == SpacingControl::Collision {
-        let rc = sim.scheme.collision_distance * l0;
+    if let SpacingControl::Collision { distance } = sim.config.method.spacing_control {
+        let rc = distance * l0;
         let (x, u, nb) = (
             &sim.particles.position,
             &sim.particles.velocity,
-            &sim.neighbors,
+            &sim.workspace.neighbors,
         );
         let du: Vec<Vec2> = (0..n)
             .into_par_iter()
@@ -52,10 +52,10 @@ pub(super) fn keep_particles_apart(
             parts.position[i] += du[i] * dt;
         }
     }
-    let rw = sim.scheme.wall_repulsion_distance * l0;
+    let rw = sim.config.method.wall_repulsion_distance * l0;
     if rw > 0.0 {
         for i in 0..n {
-            for c in sim.contacts.of(i) {
+            for c in sim.workspace.contacts.of(i) {
                 if c.distance >= rw && !c.penetrated {
                     continue;
                 }
@@ -87,10 +87,13 @@ pub(super) fn keep_particles_apart(
 /// momentum is unchanged; a smooth field changes by O(eps l0² ∇²u) per step, while the
 /// odd-even mode (neighbours moving in opposite directions, invisible to the divergence
 /// of the PPE source and to the gradient) loses a share of order eps every step.
-pub(super) fn filter_velocity<K: Kernel>(sim: &mut Simulation) {
-    let (re, n0) = (sim.params.re, sim.params.n0);
-    let eps = sim.scheme.velocity_filter;
-    let (x, u, nb) = (&sim.scratch.x_star, &sim.particles.velocity, &sim.neighbors);
+pub(super) fn filter_velocity<K: Kernel>(sim: &mut Simulation, eps: Real) {
+    let (re, n0) = (sim.config.params.re, sim.config.params.n0);
+    let (x, u, nb) = (
+        &sim.workspace.scratch.x_star,
+        &sim.particles.velocity,
+        &sim.workspace.neighbors,
+    );
     let du: Vec<Vec2> = (0..u.len())
         .into_par_iter()
         .map(|i| {
@@ -119,13 +122,16 @@ pub(super) fn filter_velocity<K: Kernel>(sim: &mut Simulation) {
 /// Next to the free surface (a surface particle within r_e) only the tangential part
 /// is kept: the surface deficit of n is physical, not disorder. The shift is capped at
 /// 0.1 l0 per step. Velocities are not re-interpolated: shifts are O(A l0) per step.
-pub(super) fn shift_particles<K: Kernel>(sim: &mut Simulation) {
-    let (l0, re, n0) = (sim.params.l0, sim.params.re, sim.params.n0);
-    let a = sim.scheme.shifting;
+pub(super) fn shift_particles<K: Kernel>(sim: &mut Simulation, a: Real) {
+    let (l0, re, n0) = (
+        sim.config.params.l0,
+        sim.config.params.re,
+        sim.config.params.n0,
+    );
     let (x, nb, contacts, surface) = (
         &sim.particles.position,
-        &sim.neighbors,
-        &sim.contacts,
+        &sim.workspace.neighbors,
+        &sim.workspace.contacts,
         &sim.particles.free_surface,
     );
     let shift: Vec<Vec2> = (0..x.len())
@@ -170,7 +176,7 @@ pub(super) fn shift_particles<K: Kernel>(sim: &mut Simulation) {
 /// Sponge layers: u <- u / (1 + alpha dt), implicit so any rate is stable. Positions
 /// of this step are already set; the damped velocity moves the particle from the next.
 pub(super) fn absorb_waves(sim: &mut Simulation, dt: Real) {
-    let layers = &sim.damping;
+    let layers = &sim.config.control.damping;
     let x = &sim.particles.position;
     sim.particles
         .velocity

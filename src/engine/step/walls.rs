@@ -18,11 +18,11 @@ pub(super) struct KernelWeights<K> {
 impl<K: Kernel> KernelWeights<K> {
     pub(super) fn new(sim: &Simulation) -> Self {
         Self {
-            re: sim.params.re,
-            re_lap: sim.params.re_lap,
+            re: sim.config.params.re,
+            re_lap: sim.config.params.re_lap,
             // Imoto's second-order Laplacian is the classic one (paper 000 Theorem 3.1)
             classic_laplacian: matches!(
-                sim.scheme.laplacian,
+                sim.config.method.laplacian,
                 LaplacianKind::Classic | LaplacianKind::SecondOrder
             ),
             _k: PhantomData,
@@ -52,9 +52,9 @@ impl<K: Kernel> WallWeights for KernelWeights<K> {
 
 pub(super) fn wall_kernels(sim: &Simulation) -> WallKernels {
     WallKernels {
-        l0: sim.params.l0,
-        re: sim.params.re,
-        re_lap: sim.params.re_lap,
+        l0: sim.config.params.l0,
+        re: sim.config.params.re,
+        re_lap: sim.config.params.re_lap,
     }
 }
 

@@ -1,0 +1,254 @@
+//! The configuration of one simulation, fixed for the run: the parameters, the method
+//! (the engine's form of the case's `scheme` block) and the step control. The case
+//! format is the contract and stays as it is; it is converted here once, into closed
+//! enums that carry their own data, so a stage matches on a variant and finds what it
+//! needs inside it.
+
+use super::math::{vec2, Real, Vec2};
+use super::params::MpsParameters;
+use crate::case::{
+    self, Case, GradientKind, KernelKind, LaplacianKind, Scheme, SolverKind, ViscosityKind,
+    WallKinematics, WallLoadKind,
+};
+
+/// Source term of the pressure Poisson equation.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum Source {
+    /// PND deviation (n* - n0)/n0 (Koshizuka & Oka 1996).
+    Pnd,
+    /// Higher-order source HS (paper 004 eq. 3).
+    HigherOrder,
+    /// HS plus error-compensating terms ECS (paper 004 eqs. 10-11).
+    HigherOrderEcs,
+    /// Velocity divergence plus the PND deviation relaxed by `relaxation` (paper 003
+    /// eq. 49 family).
+    Mixed { relaxation: Real },
+}
+
+/// The pressure equation of the particles away from the free surface.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum Projection {
+    /// The HL Laplacian of the pressure equals (rho/dt) times the source.
+    Approximate,
+    /// The corrected velocity itself has the source's HS divergence, with a share
+    /// `blend` of the Laplacian row kept (`step::exact`).
+    Exact { blend: Real },
+}
+
+/// How particles are kept apart beyond the pressure solve.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum SpacingControl {
+    None,
+    /// Pairwise inelastic collision below `distance` (in l0).
+    Collision {
+        distance: Real,
+    },
+}
+
+/// Free-surface detection: n* below `threshold` n0, confirmed by a one-sided
+/// neighbourhood (|Σ w r/r²| l0 / n above `asymmetry`); the Dirichlet value at the
+/// hydrostatic pressure half a spacing below the surface when `offset`.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct FreeSurface {
+    pub threshold: Real,
+    pub asymmetry: Real,
+    pub offset: bool,
+}
+
+/// The corrected gradient's repulsive minimum-pressure term: `strength` over pairs
+/// closer than `distance` (in l0).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Stabilization {
+    pub strength: Real,
+    pub distance: Real,
+}
+
+/// The linear solver of the pressure equation.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Solver {
+    pub kind: SolverKind,
+    pub tolerance: Real,
+    pub max_iterations: usize,
+    pub amg_rebuild_interval: usize,
+}
+
+/// The numerical method: every choice of the `scheme` block, resolved.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Method {
+    pub kernel: KernelKind,
+    pub gradient: GradientKind,
+    pub stabilization: Stabilization,
+    pub laplacian: LaplacianKind,
+    /// Pair weights of the pressure equation divided by the mean fill n*/n0, floored
+    /// at this value (`scheme.laplacian_fill_floor` below 1).
+    pub laplacian_fill_floor: Option<Real>,
+    pub source: Source,
+    pub projection: Projection,
+    pub solver: Solver,
+    pub free_surface: FreeSurface,
+    pub clip_negative_pressure: bool,
+    /// rho alpha / dt² on the diagonal (artificial compressibility alpha).
+    pub compressibility: Real,
+    pub hydrostatic_ghosts: bool,
+    pub viscosity: ViscosityKind,
+    pub spacing_control: SpacingControl,
+    /// Inelastic wall impulse below this distance (in l0).
+    pub wall_repulsion_distance: Real,
+    /// Restitution of the collisions and of the wall impulse.
+    pub restitution: Real,
+    pub velocity_filter: Option<Real>,
+    pub shifting: Option<Real>,
+    pub wall_load: WallLoadKind,
+    pub wall_kinematics: WallKinematics,
+}
+
+impl Method {
+    /// The engine's form of a (resolved) scheme block.
+    pub fn new(s: &Scheme) -> Self {
+        let positive = |v: Real| (v > 0.0).then_some(v);
+        Self {
+            kernel: s.kernel,
+            gradient: s.gradient,
+            stabilization: Stabilization {
+                strength: s.gradient_stabilization,
+                distance: s.stabilization_distance,
+            },
+            laplacian: s.laplacian,
+            laplacian_fill_floor: (s.laplacian_fill_floor < 1.0).then_some(s.laplacian_fill_floor),
+            source: match s.source {
+                case::SourceKind::Pnd => Source::Pnd,
+                case::SourceKind::HigherOrder => Source::HigherOrder,
+                case::SourceKind::HigherOrderEcs => Source::HigherOrderEcs,
+                case::SourceKind::Mixed => Source::Mixed {
+                    relaxation: s.mixed_relaxation,
+                },
+            },
+            projection: match s.projection {
+                case::Projection::Approximate => Projection::Approximate,
+                case::Projection::Exact => Projection::Exact {
+                    blend: s.exact_projection_blend,
+                },
+            },
+            solver: Solver {
+                kind: s.solver,
+                tolerance: s.solver_tolerance,
+                max_iterations: s.solver_max_iterations,
+                amg_rebuild_interval: s.amg_rebuild_interval,
+            },
+            free_surface: FreeSurface {
+                threshold: s.surface_threshold,
+                asymmetry: s.surface_asymmetry,
+                offset: s.surface_offset,
+            },
+            clip_negative_pressure: s.clip_negative_pressure,
+            compressibility: s.compressibility,
+            hydrostatic_ghosts: s.hydrostatic_ghosts,
+            viscosity: s.viscosity,
+            spacing_control: match s.spacing_control {
+                case::SpacingControl::None => SpacingControl::None,
+                case::SpacingControl::Collision => SpacingControl::Collision {
+                    distance: s.collision_distance,
+                },
+            },
+            wall_repulsion_distance: s.wall_repulsion_distance,
+            restitution: s.collision_restitution,
+            velocity_filter: positive(s.velocity_filter),
+            shifting: positive(s.shifting),
+            wall_load: s.wall_load,
+            wall_kinematics: s.wall_kinematics,
+        }
+    }
+}
+
+/// A sponge layer in engine form (see `case::DampingZone`).
+#[derive(Debug, Clone, Copy)]
+pub struct DampingLayer {
+    pub start: Vec2,
+    /// Unit vector from the inner to the outer edge.
+    pub direction: Vec2,
+    pub length: Real,
+    /// 1/s at the outer edge.
+    pub strength: Real,
+}
+
+impl DampingLayer {
+    pub fn new(zone: &case::DampingZone) -> Self {
+        let start = vec2(zone.start);
+        let span = vec2(zone.end) - start;
+        Self {
+            start,
+            direction: span / span.norm(),
+            length: span.norm(),
+            strength: zone.strength,
+        }
+    }
+
+    /// Damping rate at `x` (1/s): strength s², s the fraction of the way into the layer.
+    #[inline]
+    pub fn rate(&self, x: Vec2) -> Real {
+        let s = ((x - self.start).dot(&self.direction) / self.length).clamp(0.0, 1.0);
+        self.strength * s * s
+    }
+}
+
+/// Time step, domain and the guards that end or trim a run.
+#[derive(Debug, Clone)]
+pub struct StepControl {
+    pub cfl: Real,
+    pub max_dt: Real,
+    /// Particles that leave this box are removed.
+    pub domain_min: Vec2,
+    pub domain_max: Vec2,
+    /// Speed above which the run is declared diverged.
+    pub speed_limit: Real,
+    /// How many particles may be removed for exceeding `speed_limit`
+    /// (`scheme.runaway_allowance`).
+    pub runaway_budget: usize,
+    /// Sponge layers (case `damping_zones`).
+    pub damping: Vec<DampingLayer>,
+}
+
+/// Everything fixed for the run.
+#[derive(Debug, Clone)]
+pub struct Config {
+    pub params: MpsParameters,
+    pub method: Method,
+    /// The case's scheme block as resolved (what summary.json reports).
+    pub scheme: Scheme,
+    pub control: StepControl,
+}
+
+impl Config {
+    /// The configuration of a (validated) case whose scene has `particles` particles in
+    /// the box `domain_min`..`domain_max`, the fastest particle or wall moving at `fastest`.
+    pub fn new(
+        case: &Case,
+        params: MpsParameters,
+        (domain_min, domain_max): (Vec2, Vec2),
+        particles: usize,
+        fastest: Real,
+    ) -> Self {
+        let g = vec2(case.fluid.gravity).norm();
+        let height = (domain_max.y - domain_min.y).max(domain_max.x - domain_min.x);
+        let speed_limit = case
+            .scheme
+            .max_speed
+            .unwrap_or(10.0 * ((2.0 * g * height).sqrt() + fastest) + 1.0);
+        let scheme = case.scheme.clone().resolved();
+        Self {
+            params,
+            method: Method::new(&scheme),
+            scheme,
+            control: StepControl {
+                cfl: case.time.cfl,
+                max_dt: case.time.max_dt,
+                domain_min,
+                domain_max,
+                speed_limit,
+                runaway_budget: (case.scheme.runaway_allowance.max(0.0) * particles as Real).floor()
+                    as usize,
+                damping: case.damping_zones.iter().map(DampingLayer::new).collect(),
+            },
+        }
+    }
+}
