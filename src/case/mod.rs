@@ -1,4 +1,4 @@
-//! The case format of DESIGN.md §2.2: serde types with defaults, loading with
+//! The case format (README.md, "Case format"): serde types with defaults, loading with
 //! `--set` overrides, and validation that names the field path of every problem.
 //!
 //! Unknown fields are rejected (`deny_unknown_fields`): a typo in a case must not be

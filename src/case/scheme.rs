@@ -1,5 +1,5 @@
 //! The `scheme` block: every numerical choice, each a closed serde-tagged enum or a
-//! number with a documented default. An empty block means the measured default.
+//! number with a documented default. An empty block means the default scheme.
 //! Unknown names are rejected by serde with the list of valid ones.
 
 use schemars::JsonSchema;
@@ -99,16 +99,15 @@ pub enum SolverKind {
     /// Conjugate gradient with a Jacobi preconditioner.
     PcgJacobi,
     /// Conjugate gradient with incomplete Cholesky IC(0): 4x fewer iterations than Jacobi
-    /// on the tank (32 vs 126), but the iterations grow with resolution (59, 111, 290 at
-    /// 10k, 40k, 160k particles) and its triangular solves run on one thread.
+    /// on the still tank, but its iterations grow with resolution (59 a step at 10k
+    /// particles, 290 at 160k) and its triangular solves run on one thread.
     PcgIc0,
     /// Conjugate gradient with a smoothed-aggregation algebraic multigrid V-cycle
     /// (engine::pressure::amg), rebuilt every `amg_rebuild_interval` steps and reused in
-    /// between (engine::pressure::reuse). Measured with a rebuild every step on the hydrostatic tank (30
-    /// steps from rest, 2 threads, loaded 2-core machine): 7, 7, 15 iterations at 10k,
-    /// 40k, 160k particles; whole step 1.3x, 1.9x, 3x faster than IC(0); the setup is
-    /// about half of the solve. At 5k particles the two are level, at 1.2k IC(0) is
-    /// ahead by about 1 ms per step.
+    /// between (engine::pressure::reuse). The default because its iterations do not grow
+    /// with resolution (about 6 a step from 10k to 1.3M particles): even rebuilt every
+    /// step, a step at 160k particles is 3x faster than with IC(0). Below about 5k
+    /// particles IC(0) is as fast.
     #[default]
     PcgAmg,
     /// faer's sparse direct factorisation (Cholesky; LU when non-symmetric).
@@ -135,14 +134,13 @@ pub enum WallLoadKind {
     /// The reaction of the wall terms on the fluid: Σ (m/rho) (p_i + p_k) r w / r² over
     /// the virtual wall points, plus the repulsion safety net and wall viscosity. Its
     /// weights grow like 1/d towards the wall, so it reads the arrangement as well as the
-    /// pressure: measured on the still tank with the lattice perturbed by ±0.2 l0, 12-20%
-    /// below the water weight (mean -17.6% over 0.5-1.5 s).
+    /// pressure: on the still tank with the lattice perturbed by ±0.2 l0 it reads 12-20 %
+    /// below the water weight.
     Reaction,
     /// The pressure interpolated onto points along the surface and integrated,
     /// F = -∫ p n ds (engine::walls::pressure_load), plus wall viscosity. Exact for a
-    /// hydrostatic field on any arrangement; on the perturbed still tank within ±4.4% of
-    /// the weight (mean -0.4%: the sloshing of the released disorder). Wedge C_F from the
-    /// slope at 10 / 7.5 / 5 mm: 13.56 / 11.38 / 15.01 (reaction: 13.91 / 12.31 / 15.23).
+    /// hydrostatic field on any arrangement; on the perturbed still tank within ±4.4 % of
+    /// the weight (the sloshing of the released disorder), hence the default.
     #[default]
     PressureIntegral,
 }
@@ -160,7 +158,8 @@ pub enum ViscosityKind {
     /// form of the Monaghan–Cleary term: the same ∇²u + 2∇(∇·u) = ∇²u in the bulk of an
     /// incompressible flow, and its dissipation is -2 nu ∫ e:e, so a cut kernel at the
     /// free surface is the stress-free condition. Walls enter as in `laplacian` (the
-    /// mirror velocity).
+    /// mirror velocity). The default: the viscous standing wave decays at 0.649 1/s
+    /// against the exact linear 0.700 (the `laplacian` form: 0.459).
     #[default]
     StrainRate,
 }
@@ -173,32 +172,23 @@ pub enum WallKinematics {
     /// The wall's virtual points move with the wall in the HS divergence,
     /// -c ∇Z·(u_i - u_w), and the Neumann gradient of the virtual pressures is
     /// rho (g - a_w). A particle that falls behind an advancing face is pushed only by
-    /// its fluid neighbours: on a box moving at 1 m/s through still water, particles sit
-    /// 0.27 l0 in front of the leading face with pressure spikes of 28 kPa (rho V²/2 =
-    /// 500 Pa), and the force scatters by 756 N/m per step. On a flat plate started
-    /// impulsively on still water the row under the plate leaves 24-27 % faster than the
-    /// plate and the added mass reads 1.078 / 1.099 / 1.116 of Wagner's at 10 / 5 /
-    /// 2.5 mm (tests/bodies/plate_impulse.rs): a flat impact's impulse comes out 8-12 %
-    /// high.
+    /// its fluid neighbours, so the force on a box moving at 1 m/s through still water
+    /// scatters by 756 N/m per step, and a flat plate started impulsively on still water
+    /// carries 1.078 / 1.099 / 1.116 of Wagner's added mass at 10 / 5 / 2.5 mm
+    /// (tests/bodies/plate_impulse.rs): a flat impact's impulse comes out 8-12 % high.
+    /// The default because it is the one that keeps long runs stable (see `neumann`).
     #[default]
     Source,
     /// The normal velocity of a particle approaching the wall enters the Neumann gradient,
     /// rho (g - a_w) + (rho/dt) min(0, (u_i - u_w)·n) n, so the virtual pressure behind
     /// the wall pushes it back in the correction; the divergence has no wall term.
-    /// Measured against `source` on the same runs: per-step force scatter on the moving
-    /// box 409 vs 756 N/m; wedge C_F (keel-contact origin) 13.47 / 13.71 / 11.53 / 14.45
-    /// at 10 / 8 / 6.25 / 5 mm (source: 14.48 / 13.52 / 14.39 / 15.60) with per-step
-    /// scatter 0.64 / 0.76 / 0.99 / 0.53 of the mean (source: 1.04 / 1.27 / ~0.9 / 0.69).
-    /// Not the default: the floating box diverges with it at 0.80 s (a particle at the
-    /// tank bottom runs away; session 8, with the runaway allowance, it completes but
-    /// removes 108 particles, 37 of them runaways from 0.99 s on, in 538 s), and at
-    /// 6.25 mm the wedge reads 11.53 ± 0.76. Ensembles of four lattice offsets
-    /// (session 8, 2 m x 1 m tank): 13.54 / 13.34 / 14.60 at 10 / 8 / 5 mm, with
-    /// F / (rho V³ t) rising through the window (about 9 at 4 ms, 17 at 14 ms at 5 mm),
-    /// so the force is not self-similar. On the impulsively started flat plate it
-    /// carries Wagner's added mass within 3.8 / 2.1 / 1.3 % at 10 / 5 / 2.5 mm, the
-    /// water under the plate at the plate's velocity within 0.1 %: the choice for a
-    /// flat-bottomed body hitting water.
+    /// On the impulsively started flat plate it carries Wagner's added mass within
+    /// 3.8 / 2.1 / 1.3 % at 10 / 5 / 2.5 mm, the water under the plate at the plate's
+    /// velocity within 0.1 %, and the force on the moving box scatters by 409 N/m per
+    /// step instead of 756: the choice for a short impact of a flat-bottomed body.
+    /// Not the default: over the floating box's 4 s particles under the box run away
+    /// (108 removed), and on the wedge the force is not self-similar with it
+    /// (F / (rho V³ t) rises from about 9 at 4 ms to 17 at 14 ms at 5 mm).
     Neumann,
 }
 
@@ -209,31 +199,22 @@ pub enum Projection {
     /// The HL Laplacian of the pressure equals (rho/dt) times the source: the usual
     /// MPS projection. The Laplacian is not the HS divergence of the corrected gradient
     /// that then moves the particles, and next to a moving wall the difference is a
-    /// first-row error that does not vanish with refinement: on a flat plate started
-    /// impulsively on still water the row under it leaves at 1.24-1.27 V and the added
-    /// mass reads 1.075 / 1.096 / 1.116 / 1.129 of Wagner's at 10 / 5 / 2.5 / 1.25 mm.
+    /// first-row error that does not vanish with refinement: a flat plate started
+    /// impulsively on still water carries 1.075 / 1.096 / 1.116 / 1.129 of Wagner's added
+    /// mass at 10 / 5 / 2.5 / 1.25 mm.
     #[default]
     Approximate,
     /// Rows whose neighbours are all unknowns ask that the corrected velocity itself
     /// have the source's HS divergence, wall terms included (engine::step::exact):
     /// GMRES on that non-symmetric system, matrix-free, started from the approximate
     /// solution and preconditioned by the Laplacian's AMG cycle; rows next to the free
-    /// surface keep the Laplacian. Measured (session 10):
-    /// - the plate's added mass 0.988 / 0.995 / 1.001 at 10 / 5 / 2.5 mm with a blend
-    ///   of 0.05, the row under it at 0.98-1.01 V; 1.003 / 1.014 / 1.021 (row at
-    ///   1.03-1.06 V) with the default 0.1. The approximate projection's excess is this
-    ///   mismatch between the Laplacian and the divergence of the corrected gradient;
-    /// - the wedge's is not: at 1 cm seven runs off the mirror line read 14.03 ± 0.68
-    ///   (approximate: 14.31 ± 0.39), at 5 mm two read 15.77 and 18.16 (approximate at
-    ///   the same offsets 14.66 and 14.89), with a per-step scatter of 0.9-1.2 of the
-    ///   mean force against about 0.6;
-    /// - the floating box runs its 4 s with a blend of 0.1 or 0.2 (heave 9.8 -> 0.9 mm);
-    ///   with 0.05 particles under the box run away from 1.2 s and the run fails at
-    ///   1.6 s, with 0.075 the box is thrown up by 3.5 s;
-    /// - about 14 GMRES iterations a step on the wedge at 1 cm: the run costs 2.4-2.7
-    ///   times the approximate one.
-    ///
-    /// An option for short impacts of flat-bottomed bodies, not the default.
+    /// surface keep the Laplacian. It carries the impulsively started plate's added mass
+    /// within 2.1 % of Wagner's (1.003 / 1.014 / 1.021 at 10 / 5 / 2.5 mm with the
+    /// default blend): the approximate projection's excess is the mismatch between the
+    /// Laplacian and the divergence of the corrected gradient. The wedge's force is not
+    /// lowered (at 1 cm with r_e = 2.1 l0: 14.03 ± 0.68 against 14.31 ± 0.39),
+    /// and a run costs 2.4-2.7 times the approximate one (about 14 GMRES iterations a
+    /// step): an option for short impacts of flat-bottomed bodies, not the default.
     Exact,
 }
 
@@ -279,16 +260,12 @@ pub struct Scheme {
     /// disables it. A particle missing neighbours (splash, a sheet landing on a pool)
     /// otherwise solves its source with a Laplacian short by its fill, so its pressure
     /// comes out n0/n* too high, while the corrected gradient is renormalised to its
-    /// actual neighbours: the correction overshoots. Measured on the dam break at a/40
-    /// in a tank tall enough to keep the run-up: a sheet falling at 2.7 m/s onto the
-    /// pool by the far wall reversed to +8.9 m/s in one step (161 kPa) and the run
-    /// failed at 0.88 s; with a floor of 0.3 it runs to 5 s at CFL 0.1 and 0.12 (0.15
-    /// is on the edge: it completed once and failed at 2.96 s after a round-off change;
-    /// 0.2 fails at 1.14 s). `cases/dam_break.json` sets 0.3.
-    /// Not the default: it also lowers the pressure of the thin layers under a jet root.
-    /// The wedge at 1 cm reads C_F 11.97 (off: 15.61) and peak Cp 4.82 (off: 5.76); at
-    /// 5 mm C_F 15.36 (off: 15.37) and peak Cp 6.52 (off: 6.13). The standing wave
-    /// decays at 0.635 1/s (off: 0.649; exact 0.700).
+    /// actual neighbours: the correction overshoots. On the dam break at a/40 a sheet
+    /// falling at 2.7 m/s onto the pool by the far wall reverses to +8.9 m/s in one step
+    /// without it and the run fails at 0.88 s; with a floor of 0.3 it runs to 5 s at
+    /// CFL 0.1. `cases/dam_break.json` sets 0.3.
+    /// Not the default: it also lowers the pressure of the thin layers under a jet root
+    /// (the wedge at 1 cm: C_F 11.97 instead of 15.61).
     pub laplacian_fill_floor: f64,
     /// Relaxation gamma of the PND term in the mixed source.
     pub mixed_relaxation: f64,
@@ -312,19 +289,9 @@ pub struct Scheme {
     /// Velocity filter epsilon: each step u_i += epsilon Σ_j w_ij (u_j - u_i) / n0 over
     /// the fluid neighbours (symmetric, so momentum is kept). It damps the odd-even
     /// velocity mode that the divergence and the gradient do not see; 0 disables it.
-    /// Default 0.01, measured against 0 on the same runs:
-    /// - still tank, 20 s: load -0.0005 %, max speed 0.0 (without: exact until 7 s, then
-    ///   a mode seeded by round-off, +3 % at 11 s); a ±1e-4 l0 seed decays at dt and dt/2;
-    /// - ±0.2 l0 perturbed tank: 0.12-0.27 m/s instead of 0.34-0.44;
-    /// - floating box: draft -0.07 % (without: -0.65 %), heave 8.9 -> 0.3 mm (-> 2.3 mm);
-    /// - wedge C_F (keel-contact origin) 15.61 ± 1.15 / 14.07 ± 1.16 / 15.37 ± 0.54 at
-    ///   10 / 8 / 5 mm (without: 14.48 ± 1.29 / 13.52 ± 1.12 / 15.60 ± 0.59); the
-    ///   window-averaged pressure at 10 mm rises towards the jet root as the similarity
-    ///   solution does (4.87 at the keel to 5.75 at z/(Vt) = 0.3, all within 10 % of its
-    ///   table; without: flat at about 5, -24 % at 0.3);
-    /// - dam-break front within 0.7 % and residual column within 1.6 % of before;
-    /// - the CMPS gradient with the CHL Laplacian (already 190 %+ off hydrostatic on the
-    ///   still tank) runs away at 0.3 s with it.
+    /// The default 0.01 keeps a still tank still for 20 s (load -0.0005 %; without it a
+    /// mode seeded by round-off lifts the load by 3 % at 11 s) and moves the dam-break
+    /// front by under 0.7 %.
     pub velocity_filter: f64,
     /// Form of the viscous term (only evaluated when the kinematic viscosity is positive).
     pub viscosity: ViscosityKind,
@@ -338,9 +305,9 @@ pub struct Scheme {
     /// `max_speed` before the run fails (counted in the summary's `particles_runaway`,
     /// the first one described in `first_runaway`); 0: the first runaway fails the run.
     /// A lone splash particle thrown out at an impact is not a diverged simulation:
-    /// DualSPHysics likewise excludes such particles. Measured on the dam break's impact
-    /// on the far wall: a thin sheet running up the wall flickers between free surface
-    /// and interior, and one of its particles takes 0.8 MPa.
+    /// DualSPHysics likewise excludes such particles. At the dam break's impact on the
+    /// far wall a thin sheet running up the wall flickers between free surface and
+    /// interior, and one of its particles takes 0.8 MPa.
     pub runaway_allowance: f64,
     /// Which equation the pressure of particles away from the free surface solves.
     pub projection: Projection,
@@ -349,10 +316,10 @@ pub struct Scheme {
     /// divergence of the corrected gradient does not see the odd-even pressure mode, so
     /// without it GMRES stalls at a residual of about 2e-3 and the answer depends on the
     /// iteration budget (wedge at 1 cm: C_F 13.7 after 5 iterations, 17.0 after 20).
-    /// Measured on the impulsively started plate, added mass at 10 / 5 mm: 0.987 / 0.987
-    /// at 0.03 (40 GMRES iterations to 3e-7), 0.988 / 0.995 at 0.05, 0.995 / 1.005 at
-    /// 0.075, 1.003 / 1.014 at 0.1, 1.035 / 1.048 at 0.3 (the approximate projection:
-    /// 1.075 / 1.096). The default 0.1 is the smallest that kept the floating box stable.
+    /// A larger share moves the plate's added mass towards the approximate projection's
+    /// (1.003 of Wagner's at 1 cm with 0.1, 1.035 with 0.3, 1.075 approximate); the
+    /// default 0.1 is the smallest that keeps the floating box stable over 4 s (with 0.05
+    /// the run fails at 1.6 s).
     pub exact_projection_blend: f64,
 }
 

@@ -209,12 +209,11 @@ fn free_fall_wedge_velocity_matches_its_own_loads() {
 /// acceleration part of the force (m_a dV/dt, about 12 % of it at 0.8 t_chine) from the
 /// same added mass, which is Wagner's assumption, not the similarity solution's, and
 /// the 1 cm run's C_F itself carries several per cent.
-/// Measured (session 12, CFL 0.1, every sample of 0.6-0.9 t_chine), mean and worst:
-/// at 1 cm with the wedge 0 / 1.1 (shipped) / 2.5 / 4 mm off the axis +6.5 / +0.6 /
-/// +2.0 / +4.0 % and +15.9 / +5.1 / +7.0 / +10.6 %. With the CFL 0.2 the case had
-/// before, a jet-root particle thrown out at 50-150 m/s took the water off the face for
-/// several milliseconds: at 1 cm (offset 3.1 mm) +17.6 % and +41 %, at the shipped 5 mm
-/// -37.2 % and -48.5 %.
+/// At CFL 0.1, every sample of 0.6-0.9 t_chine, mean and worst: at 1 cm with the wedge
+/// 0 / 1.1 (shipped) / 2.5 / 4 mm off the axis +6.5 / +0.6 / +2.0 / +4.0 % and
+/// +15.9 / +5.1 / +7.0 / +10.6 %. The case sets CFL 0.1 because at 0.2 a jet-root
+/// particle thrown out at 50-150 m/s takes the water off the face for several
+/// milliseconds (-37.2 % and -48.5 % at 5 mm).
 #[test]
 fn free_fall_wedge_slows_like_the_momentum_model() {
     let FreeFallRun {

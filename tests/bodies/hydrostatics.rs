@@ -14,11 +14,10 @@ use mpsfsi::coupling::CouplingOptions;
 ///
 /// Measured with the pressure-integral load: 784.80 / 784.80 / 1117.60 N/m, each +0.00 %
 /// (the lattice with the wall terms is an exact discrete equilibrium; the other load
-/// estimator, the reaction of the wall terms, read -5.25 % on the box). Until session 11
-/// the scene kept particles l0/2 clear of every surface: the box off the lattice then
-/// failed within 0.2 s and the wedge ran away from its apex (forces +437 % to -133 %
-/// per 0.1 s), because the strip left empty next to a face that is not on a cell
-/// boundary read as free surface (`scene::SURFACE_CLEARANCE`).
+/// estimator, the reaction of the wall terms, reads -5.25 % on the box). The scene keeps
+/// particles only 0.1 l0 clear of a surface (`scene::SURFACE_CLEARANCE`): with l0/2 the
+/// strip left empty next to a face that is not on a cell boundary reads as free surface,
+/// and the box off the lattice fails within 0.2 s.
 #[test]
 fn fixed_submerged_body_carries_its_buoyancy() {
     let wedge_area = 0.5 * 0.3 - 0.25 * 0.1443;

@@ -251,25 +251,25 @@ impl PressureProfile {
 /// millisecond: the ensembles of `wedge_force_coefficient_converges_with_spacing`
 /// measure the spread.
 ///
-/// Measured (session 11): C_F = 13.39 ± 0.22 (-4.6 %), per-step scatter 0.36 of the
-/// mean; peak Cp 5.60 at z/(Vt) = 0.45 (-19.2 %); the profile within 4 % of the table on
-/// the lower face (4.40 / 4.53 / 4.59 / 4.83 at z/(Vt) = -1 / -0.75 / -0.5 / -0.25) and
+/// It reads C_F = 13.39 ± 0.22 (-4.6 %), per-step scatter 0.36 of the mean; peak Cp
+/// 5.60 at z/(Vt) = 0.45 (-19.2 %); the profile within 4 % of the table on the lower
+/// face (4.40 / 4.53 / 4.59 / 4.83 at z/(Vt) = -1 / -0.75 / -0.5 / -0.25) and
 /// -5 / -7 / -9 / -15 % at 0 / 0.1 / 0.2 / 0.3.
-/// Sessions 1-10 shipped 5 mm with the default r_e = 2.1 l0: 14.93 ± 0.41 (+6.3 %), peak
-/// Cp 5.63, the lower face +8-9 %; but that error grows with refinement (+11.5 % at
-/// 2.5 mm), where with 2.5 l0 it falls (see the convergence test).
+/// The case sets r_e = 2.5 l0 because with the default 2.1 the error grows with
+/// refinement (+6.3 % at 5 mm, +11.5 % at 2.5 mm), where with 2.5 it falls (see the
+/// convergence test).
 ///
-/// Until session 9 the case put the wedge's axis halfway between two particle columns,
-/// the mirror-symmetric arrangement, which runs high (16.41 ± 0.70 at 5 mm with 2.1 l0,
-/// +16.9 %). The two faces' particles stay mirror images until round-off breaks the
-/// symmetry (Fx/Fy about 1e-6, then 1e-2-1e-1 within a step: at 7.5 ms with the wedge
-/// 1e-7 m off the axis, 3.5 ms at 1e-5 m), and while they do, the faces' pressure noise
-/// adds coherently (per-step scatter 0.97 of the mean against 0.56-0.62 at 1 cm) and the
-/// face's Cp is higher in every band (+10-12 % on the lower face, up to +41 % at z/(Vt) =
-/// 0.3-0.45; `examples/wedge_face`). At 1 cm: 16.75 symmetric, 16.51 at 1e-7 m, 13.59 at
-/// 1e-5 m, 14.02 at 1 mm, 14.09 at l0/32. The shift of 1.1 mm keeps the case off the
-/// mirror line at the usual spacings (0.11, 0.14, 0.18, 0.22, 0.275 and 0.44 l0 at 10,
-/// 8, 6.25, 5, 4 and 2.5 mm).
+/// The case shifts the wedge 1.1 mm off the lattice's mirror line: with its axis
+/// halfway between two particle columns, the mirror-symmetric arrangement runs high
+/// (16.41 ± 0.70 at 5 mm with 2.1 l0, +16.9 %). The two faces' particles stay mirror
+/// images until round-off breaks the symmetry (Fx/Fy about 1e-6, then 1e-2-1e-1 within
+/// a step: at 7.5 ms with the wedge 1e-7 m off the axis, 3.5 ms at 1e-5 m), and while
+/// they do, the faces' pressure noise adds coherently (per-step scatter 0.97 of the mean
+/// against 0.56-0.62 at 1 cm) and the face's Cp is higher in every band (+10-12 % on the
+/// lower face, up to +41 % at z/(Vt) = 0.3-0.45; `examples/wedge_face`). At 1 cm: 16.75
+/// symmetric, 16.51 at 1e-7 m, 13.59 at 1e-5 m, 14.02 at 1 mm, 14.09 at l0/32. The
+/// shift of 1.1 mm keeps the case off the mirror line at the usual spacings (0.11,
+/// 0.14, 0.18, 0.22, 0.275 and 0.44 l0 at 10, 8, 6.25, 5, 4 and 2.5 mm).
 #[test]
 fn wedge_force_and_pressure_at_default_spacing() {
     let fit = wedge_fit(&[]);
@@ -330,7 +330,7 @@ pub fn wedge_ensemble(l0: f64, members: usize, extra: &[String]) -> (f64, f64, V
 /// run cheapest, at the coarsest spacing; at 2.5 mm one run takes most of an hour and the
 /// offset-to-offset spread measured there is 0.13).
 ///
-/// With the shipped case's r_e = 2.5 l0 (session 11), runs off the mirror line:
+/// With the shipped case's r_e = 2.5 l0, runs off the mirror line:
 /// - 10 mm, seven offsets k l0/16: 12.46, 13.77, 13.19, 13.10, 12.76, 13.04, 13.17, so
 ///   13.07 ± 0.15 (-6.9 %), peak Cp 4.58-4.89 (-31 %);
 /// - 8 mm, three offsets k l0/8: 12.18, 13.31, 12.80 (12.77 ± 0.33, -9.1 %);
@@ -349,14 +349,12 @@ pub fn wedge_ensemble(l0: f64, members: usize, extra: &[String]) -> (f64, f64, V
 /// `laplacian_radius = 2.5` alone reads 14.42 (three offsets), `radius = 2.5` with
 /// `laplacian_radius = 2.1` 12.65. r_e = 2.3 l0 reads like 2.1 (15.03 at 5 mm, the lower
 /// face +4-10 %): on the lattice it adds the √5 shell of neighbours with a weight of 0.03,
-/// against 0.12 at 2.5. Other things tried with 2.1 (sessions 6-10): CFL 0.05, no
-/// clipping of negative pressures, no collisions, `wall_kinematics = "neumann"` (12.85 /
-/// 12.57 at 5 mm, the peak region 20-30 % low) and `projection = "exact"` (14.03 ± 0.68
-/// at 1 cm, 15.77 / 18.16 at 5 mm; with radius 2.5, 13.69 at 1 cm and 12.94 at 5 mm, the
-/// lower face 10-12 % low).
+/// against 0.12 at 2.5. With 2.1, neither CFL 0.05, nor leaving negative pressures
+/// unclipped, nor removing collisions, nor `wall_kinematics = "neumann"` (12.85 /
+/// 12.57 at 5 mm, the peak region 20-30 % low), nor `projection = "exact"`
+/// (14.03 ± 0.68 at 1 cm, 15.77 / 18.16 at 5 mm) makes it converge.
 ///
-/// Run end to end in session 12 (4 473 s, the machine partly shared), with its own
-/// offsets (k + 1/2) l0 / (2 members):
+/// End to end (75 minutes on two cores) with its own offsets (k + 1/2) l0 / (2 members):
 /// - 10 mm: 11.63, 14.14, 13.13, 12.86, 12.15, 13.39, 12.63, 12.99, so 12.87 ± 0.27
 ///   (-8.4 %), peak Cp 4.58-4.91;
 /// - 4 mm: 13.55, 13.55, 13.50, 13.53, so 13.53 ± 0.01 (-3.6 %), peak Cp 5.30-5.56;
@@ -364,7 +362,7 @@ pub fn wedge_ensemble(l0: f64, members: usize, extra: &[String]) -> (f64, f64, V
 ///
 /// `WEDGE_SPACINGS=0.01,0.008` and `WEDGE_SET="scheme.x=y ..."` rerun it for diagnosis.
 #[test]
-#[ignore = "75 minutes on two cores; passed end to end in session 12: 12.87 / 13.53 / 14.00 at 10 / 4 / 2.5 mm (-8.4 / -3.6 / -0.3 %)"]
+#[ignore = "75 minutes on two cores; passes: 12.87 / 13.53 / 14.00 at 10 / 4 / 2.5 mm (-8.4 / -3.6 / -0.3 %)"]
 fn wedge_force_coefficient_converges_with_spacing() {
     let spacings: Vec<f64> = std::env::var("WEDGE_SPACINGS")
         .map(|v| v.split(',').map(|x| x.parse().unwrap()).collect())
@@ -411,7 +409,7 @@ fn wedge_force_coefficient_converges_with_spacing() {
 /// Measured with the shipped case (r_e = 2.5 l0, the wedge 1.1 mm off the mirror line):
 /// C_F = 12.82 ± 0.60 (-8.7 %), impulse origin -0.51 ms (t_chine = 14.9 ms); peak Cp
 /// 4.81 at z/(Vt) = 0.35 (-31 %), the lower face within 3 %; 48 000 particles, 31 s.
-/// With r_e = 2.1 l0 (sessions 1-10): 14.08 ± 0.58, peak Cp 5.26 (-24 %).
+/// With r_e = 2.1 l0: 14.08 ± 0.58, peak Cp 5.26 (-24 %).
 #[test]
 fn wedge_force_grows_linearly_at_one_centimetre() {
     let fit = wedge_fit(&["particle_spacing=0.01".into()]);

@@ -1,18 +1,18 @@
 //! Dam break (Koshizuka & Oka 1996 geometry, l0 = a/40) against Martin & Moyce (1952).
 //!
-//! Measured (closing notes of the engine issue): the front runs 13-21 % ahead of the
-//! experiment over 1 <= T <= 3 (session 9: +21.0 % at T = 1.19 falling to +14.4 % at
-//! 2.83), and the gap does not shrink from a/40 to a/60. It is a delay, not a speed:
-//! the experiment reaches each simulated front position 0.29-0.33 later in T (mean
-//! 0.31) at every sample from T = 0.84 to 2.83, 17 ms at Martin & Moyce's a = 57 mm,
-//! the order of a gate's release. The delay converges with resolution: mean 0.262 /
-//! 0.281 / 0.310 / 0.317 at a/20 / a/30 / a/40 / a/60, spread at most 0.032 at each.
-//! references.md attributes the early times to the release. At T = 0.41 the two agree (1.10 against 1.11): water leaves under a rising
-//! gate before the column falls. Neither a turbulent wall friction nor viscosity closes
-//! it without being fitted (session 9, closing note): a log-law wall shear on the first
-//! row changes the front by under 1 %; a uniform eddy viscosity brings it within 10 %
-//! only at about 3e-3 m²/s (1e-4: +18 %, 1e-3: +11.6 % at T = 1.19), ten times a
-//! mixing-length estimate for this flow (kappa u_tau y, 2e-4-5e-4).
+//! The front runs 13-21 % ahead of the experiment over 1 <= T <= 3 (+21.0 % at
+//! T = 1.19 falling to +14.4 % at 2.83), and the gap does not shrink from a/40 to a/60.
+//! It is a delay, not a speed: the experiment reaches each simulated front position
+//! 0.29-0.33 later in T (mean 0.31) at every sample from T = 0.84 to 2.83, 17 ms at
+//! Martin & Moyce's a = 57 mm, the order of a gate's release. The delay converges with
+//! resolution: mean 0.262 / 0.281 / 0.310 / 0.317 at a/20 / a/30 / a/40 / a/60, spread
+//! at most 0.032 at each. references.md attributes the early times to the release. At
+//! T = 0.41 the two agree (1.10 against 1.11): water leaves under a rising gate before
+//! the column falls. Neither a turbulent wall friction nor viscosity closes the gap
+//! without being fitted: a log-law wall shear on the first row changes the front by
+//! under 1 %, and a uniform eddy viscosity brings it within 10 % only at about
+//! 3e-3 m²/s, ten times a mixing-length estimate for this flow (kappa u_tau y,
+//! 2e-4-5e-4).
 //! This test therefore asserts (a) the position within 25 % for 1 <= T <= 3 (looser
 //! than the issue's 10 % target, which is NOT met) and (b) that the front history is
 //! the experiment's delayed by a constant: the delay varies by under 0.1 across the
@@ -20,8 +20,8 @@
 //!
 //! The same run also follows Martin & Moyce's second measurement, the residual column
 //! height at the back wall, which the gate release and the bottom friction barely touch:
-//! measured within 0.2-5.2% over 0.56 <= t sqrt(g/a) <= 2.0 (largest at 1.84), asserted within 6%. The
-//! bulk of the collapse is right; the disagreement is at the tip of the surge.
+//! within 0.2-5.2 % over 0.56 <= t sqrt(g/a) <= 2.0 (largest at 1.84), asserted within
+//! 6 %. The bulk of the collapse is right; the disagreement is at the tip of the surge.
 
 use super::shipped_case;
 use mpsfsi::bench::stress::DAM_BREAK_LONG_CFL;
