@@ -18,8 +18,8 @@
 //!    unique together and non-empty; probe names likewise among probes.
 
 use super::{Body, Case, CaseError, Motion, Point, Projection, SourceKind};
-use crate::engine::math::{vec2, Real, Vec2};
-use crate::engine::walls::geometry::{inside, segments_intersect, signed_area};
+use crate::geometry::{inside, segments_intersect, signed_area};
+use crate::math::{vec2, Real, Vec2};
 use serde::ser::{self, Serialize};
 use std::collections::HashMap;
 

@@ -2,7 +2,6 @@
 //! tokio; bodies are wall objects whose pose the coupling sets between steps.
 
 pub mod kernel;
-pub mod math;
 pub mod neighbors;
 pub mod operators;
 pub mod params;
@@ -13,4 +12,6 @@ pub mod simulation;
 pub mod step;
 pub mod walls;
 
+// the scalar and vector types live below both case and engine; `engine::math` stays a path
+pub use crate::math;
 pub use simulation::{SimError, Simulation, StageTimes, StepInfo, WallLoad};

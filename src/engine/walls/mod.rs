@@ -14,8 +14,10 @@
 //! Virtual pressures are extrapolated from the particle (Neumann condition), so the
 //! wall adds no unknowns to the pressure equation; see `pressure`.
 
-pub mod geometry;
 pub mod pressure_load;
+
+// the polygon geometry lives below both case and engine; `walls::geometry` stays a path
+pub use crate::geometry;
 
 use crate::engine::math::{cross, perp, Real, Vec2};
 use geometry::{closest_on_segment, inside, signed_distance, WallShape};
