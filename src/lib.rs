@@ -2,11 +2,15 @@
 //! rigid bodies, and a job service that returns the loads water puts on them.
 //!
 //! Data flows one way: [`case`] -> [`engine`] scene -> step pipeline -> [`output`].
+//! [`math`] (scalar and vector types) and [`geometry`] (polygon predicates and wall
+//! shapes) sit below both `case` and `engine`.
 
 pub mod bench;
 pub mod case;
 pub mod coupling;
 pub mod engine;
+pub mod geometry;
+pub mod math;
 pub mod output;
 pub mod run;
 pub mod service;

@@ -4,8 +4,8 @@
 
 use crate::case::{self, Case, CaseError, Limits, Scheme};
 use crate::coupling::Coupling;
-use crate::engine::math::{vec2, Real};
 use crate::engine::{SimError, Simulation, StageTimes};
+use crate::math::{vec2, Real};
 use crate::output::{probes::ProbePoint, RunWriter};
 use serde::{Deserialize, Serialize};
 use std::path::Path;

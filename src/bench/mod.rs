@@ -582,7 +582,7 @@ fn score_standing_wave(
         .iter()
         .map(|p| crate::engine::math::vec2(*p))
         .collect();
-    let depth = crate::engine::walls::geometry::signed_area(&points).abs() / width;
+    let depth = crate::geometry::signed_area(&points).abs() / width;
     let k = 2.0 * std::f64::consts::PI / width;
     let (g, nu) = (vec_norm(case.fluid.gravity), case.fluid.kinematic_viscosity);
     let omega = reference::wave_frequency(g, k, depth);

@@ -21,8 +21,8 @@
 //! one is the half-space flat plate, I~ = rho pi c⁴ / 16. The wetted surface is the
 //! set of wall contacts of the last step closer than one spacing to the body.
 
-use crate::engine::math::{Real, Vec2};
 use crate::engine::Simulation;
+use crate::math::{Real, Vec2};
 
 /// How the coupling estimates the added mass it puts on both sides of the body equation.
 #[derive(Debug, Clone, Copy, PartialEq)]

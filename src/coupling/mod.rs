@@ -30,9 +30,9 @@ pub use added_mass::AddedMass;
 pub use prescribed::{Kinematics, PrescribedVelocity};
 
 use crate::case::{Case, Dof, Motion};
-use crate::engine::math::{cross, rotate, vec2, Real, Vec2};
-use crate::engine::walls::geometry::{centroid, polar_moment_about_centroid, signed_area};
 use crate::engine::Simulation;
+use crate::geometry::{centroid, polar_moment_about_centroid, signed_area};
+use crate::math::{cross, rotate, vec2, Real, Vec2};
 use rapier2d_f64::prelude::{
     ColliderBuilder, LockedAxes, MassProperties, PhysicsWorld, RigidBodyBuilder, RigidBodyHandle,
     Vector,

@@ -2,7 +2,7 @@
 //! linearly interpolated and held constant outside its range.
 
 use crate::case::VelocitySample;
-use crate::engine::math::{vec2, Real, Vec2};
+use crate::math::{vec2, Real, Vec2};
 
 /// Imposed velocity of a prescribed body.
 #[derive(Debug, Clone)]

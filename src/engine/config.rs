@@ -4,7 +4,7 @@
 //! enums that carry their own data, so a stage matches on a variant and finds what it
 //! needs inside it.
 
-use super::math::{vec2, Real, Vec2};
+use crate::math::{vec2, Real, Vec2};
 use super::params::MpsParameters;
 use crate::case::{
     self, Case, GradientKind, KernelKind, LaplacianKind, Scheme, SolverKind, ViscosityKind,

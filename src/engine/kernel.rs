@@ -4,7 +4,7 @@
 //!
 //! Notation: q = r / r_e.
 
-use super::math::Real;
+use crate::math::Real;
 use crate::case::KernelKind;
 
 /// A weight function and its first two radial derivatives.

@@ -3,7 +3,6 @@
 
 pub mod config;
 pub mod kernel;
-pub mod math;
 pub mod neighbors;
 pub mod operators;
 pub mod params;
@@ -15,4 +14,6 @@ pub mod step;
 pub mod walls;
 mod workspace;
 
+// the scalar and vector types live below both case and engine; `engine::math` stays a path
+pub use crate::math;
 pub use simulation::{SimError, Simulation, StageTimes, StepInfo, WallLoad};

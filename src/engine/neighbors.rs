@@ -3,7 +3,7 @@
 //! fixed chunks of particles and concatenated in order, so the list (and every
 //! sum over it) is the same whatever the number of threads.
 
-use super::math::{Real, Vec2};
+use crate::math::{Real, Vec2};
 use rayon::prelude::*;
 
 /// Cells of side `cell_size` covering a bounding box; particles sorted by cell.

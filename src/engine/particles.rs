@@ -1,6 +1,6 @@
 //! Struct-of-arrays particle storage: one array per quantity, indexed by particle.
 
-use super::math::{Real, Vec2};
+use crate::math::{Real, Vec2};
 
 #[derive(Debug, Clone, Default)]
 pub struct Particles {

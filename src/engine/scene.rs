@@ -2,10 +2,10 @@
 //! the fluid blocks, outside every solid and at least [`SURFACE_CLEARANCE`] from every
 //! wall and body surface, and the wall objects with their solid regions.
 
-use super::math::{cross, rotate, vec2, Real, Vec2};
+use crate::math::{cross, rotate, vec2, Real, Vec2};
 use super::params::MpsParameters;
 use super::particles::Particles;
-use super::walls::geometry::{centroid, closest_on_segment, inside, WallShape};
+use crate::geometry::{centroid, closest_on_segment, inside, WallShape};
 use super::walls::{WallObject, WallState};
 use crate::case::{Case, FluidSide, Motion};
 use std::collections::HashSet;

@@ -2,7 +2,7 @@
 //! server runs many of these side by side.
 
 use super::config::Config;
-use super::math::{vec2, Real, Vec2};
+use crate::math::{vec2, Real, Vec2};
 use super::params::MpsParameters;
 use super::particles::Particles;
 use super::scene::{build_scene, Scene};

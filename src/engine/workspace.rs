@@ -1,6 +1,6 @@
 //! Buffers the step reuses from one step to the next (no allocation at a steady size).
 
-use super::math::{Real, Vec2};
+use crate::math::{Real, Vec2};
 use super::neighbors::NeighborList;
 use super::pressure::{CsrMatrix, SolverCache};
 use super::walls::WallContacts;

@@ -15,7 +15,7 @@
 //! reference; `loads_filtered.csv` is for reading peaks without particle noise.
 
 use crate::case::{Case, Motion};
-use crate::engine::math::Real;
+use crate::math::Real;
 use std::collections::BTreeMap;
 use std::io;
 use std::path::Path;

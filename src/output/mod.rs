@@ -11,8 +11,8 @@ pub mod probes;
 pub mod snapshots;
 pub mod vtk;
 
-use crate::engine::math::Real;
 use crate::engine::Simulation;
+use crate::math::Real;
 use std::fs::File;
 use std::io::{BufWriter, Write};
 use std::path::Path;

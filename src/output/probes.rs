@@ -2,8 +2,8 @@
 //! p = Σ w(|x_j - x|) p_j / Σ w (kernel of the scheme at r_e).
 
 use crate::engine::kernel::weight;
-use crate::engine::math::{Real, Vec2};
 use crate::engine::Simulation;
+use crate::math::{Real, Vec2};
 
 #[derive(Debug, Clone)]
 pub struct ProbePoint {

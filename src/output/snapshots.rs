@@ -7,8 +7,8 @@
 //! naming only complete `.vtu` files.
 
 use super::vtk::{pvd_string, vtu_string, PvdEntry, VtuFields};
-use crate::engine::math::Real;
 use crate::engine::Simulation;
+use crate::math::Real;
 use std::path::{Path, PathBuf};
 
 /// Folder of the snapshots inside the run directory.

@@ -6,7 +6,7 @@
 //! whose `DataArray`s are inline ASCII), which is what the benchmark uses to measure
 //! the dam-break surge front from the snapshots.
 
-use crate::engine::math::{Real, Vec2};
+use crate::math::{Real, Vec2};
 use std::collections::BTreeMap;
 use std::fmt::Write as _;
 use std::io;

@@ -7,10 +7,10 @@
 use crate::common::*;
 use mpsfsi::case::Case;
 use mpsfsi::engine::kernel::{Kernel, Koshizuka};
-use mpsfsi::engine::math::{Real, Vec2};
-use mpsfsi::engine::walls::geometry::inside;
 use mpsfsi::engine::walls::{wall_terms, PlacedWall, WallKernels, WallWeights};
 use mpsfsi::engine::Simulation;
+use mpsfsi::geometry::inside;
+use mpsfsi::math::{Real, Vec2};
 
 struct Weights {
     re: Real,

@@ -3,8 +3,8 @@
 
 use mpsfsi::case::{load_case_file, Case};
 use mpsfsi::coupling::{BodySample, Coupling, CouplingOptions};
-use mpsfsi::engine::math::{Real, Vec2};
 use mpsfsi::engine::{SimError, Simulation};
+use mpsfsi::math::{Real, Vec2};
 use std::path::PathBuf;
 use std::time::Instant;
 

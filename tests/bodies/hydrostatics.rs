@@ -134,7 +134,7 @@ fn floating_box_settles_at_archimedes_draft() {
 /// Free surface away from the box: the median over lattice columns with
 /// 0.4 < |x| < 0.8 of the highest particle plus l0/2 (a median, so a splash or a
 /// particle thrown up does not move it).
-fn surface_level(x: &[mpsfsi::engine::math::Vec2], l0: f64) -> f64 {
+fn surface_level(x: &[mpsfsi::math::Vec2], l0: f64) -> f64 {
     let mut tops: std::collections::BTreeMap<i64, f64> = Default::default();
     for p in x.iter().filter(|p| p.x.abs() > 0.4 && p.x.abs() < 0.8) {
         let column = (p.x / l0).floor() as i64;

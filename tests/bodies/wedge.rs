@@ -5,8 +5,8 @@
 use crate::common::*;
 use mpsfsi::bench::measure::{fit_force_coefficient, force_coefficient_from_contact};
 use mpsfsi::coupling::CouplingOptions;
-use mpsfsi::engine::math::Vec2;
 use mpsfsi::engine::Simulation;
+use mpsfsi::math::Vec2;
 
 const V: f64 = 6.15;
 const C_SIMILARITY: f64 = 14.04;

@@ -56,6 +56,16 @@ fn non_finite_numbers_name_their_path() {
 }
 
 #[test]
+fn non_finite_reports_the_first_in_field_order_with_its_value() {
+    let e = rejected(|c| {
+        c.scheme.radius = f64::NAN;
+        c.time.end = f64::NAN;
+        c.fluid.gravity[0] = f64::NEG_INFINITY;
+    });
+    assert_error(&e, "fluid.gravity[0]", "must be a finite number (got -inf)");
+}
+
+#[test]
 fn non_finite_inside_motion_names_the_tagged_fields() {
     let e = rejected(|c| {
         if let mpsfsi::case::Motion::Free { velocity, .. } = &mut c.bodies[1].motion {

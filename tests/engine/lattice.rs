@@ -3,10 +3,10 @@
 
 use mpsfsi::case::{GradientKind, KernelKind, LaplacianKind, Scheme};
 use mpsfsi::engine::kernel::Koshizuka;
-use mpsfsi::engine::math::Vec2;
 use mpsfsi::engine::neighbors::NeighborList;
 use mpsfsi::engine::operators::{gradient, laplacian, Cloud, LatticeConstants, Normalisation};
 use mpsfsi::engine::params::MpsParameters;
+use mpsfsi::math::Vec2;
 
 fn lattice(n: usize, l0: f64) -> Vec<Vec2> {
     (0..n * n)

@@ -1,7 +1,7 @@
 //! The cell-grid CSR neighbour list equals brute force on seeded random clouds.
 
-use mpsfsi::engine::math::Vec2;
 use mpsfsi::engine::neighbors::NeighborList;
+use mpsfsi::math::Vec2;
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 

@@ -7,11 +7,11 @@
 //! round-off: asserted to 1e-9), whatever the arrangement.
 
 use mpsfsi::engine::kernel::{Kernel, Koshizuka};
-use mpsfsi::engine::math::Vec2;
 use mpsfsi::engine::neighbors::CellGrid;
-use mpsfsi::engine::walls::geometry::WallShape;
 use mpsfsi::engine::walls::pressure_load::pressure_loads;
 use mpsfsi::engine::walls::{PlacedWall, WallObject, WallState};
+use mpsfsi::geometry::WallShape;
+use mpsfsi::math::Vec2;
 
 const RHO: f64 = 1000.0;
 const G: f64 = 9.81;

@@ -4,12 +4,12 @@
 
 use mpsfsi::case::Scheme;
 use mpsfsi::engine::kernel::{Kernel, Koshizuka};
-use mpsfsi::engine::math::Vec2;
 use mpsfsi::engine::params::MpsParameters;
-use mpsfsi::engine::walls::geometry::WallShape;
 use mpsfsi::engine::walls::{
     wall_terms, PlacedWall, WallKernels, WallObject, WallState, WallWeights,
 };
+use mpsfsi::geometry::WallShape;
+use mpsfsi::math::Vec2;
 
 struct W(f64, f64);
 impl WallWeights for W {

@@ -17,11 +17,11 @@
 
 use mpsfsi::case::LaplacianKind;
 use mpsfsi::engine::kernel::WendlandC2;
-use mpsfsi::engine::math::{Real, Vec2};
 use mpsfsi::engine::neighbors::NeighborList;
 use mpsfsi::engine::operators::{
     laplacian_row, Cloud, LaplacianRow, LatticeConstants, Normalisation,
 };
+use mpsfsi::math::{Real, Vec2};
 use rayon::prelude::*;
 use std::f64::consts::PI;
 

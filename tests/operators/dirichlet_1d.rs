@@ -28,10 +28,10 @@
 
 use mpsfsi::case::{LaplacianKind, SolverKind};
 use mpsfsi::engine::kernel::Koshizuka;
-use mpsfsi::engine::math::{Real, Vec2};
 use mpsfsi::engine::neighbors::NeighborList;
 use mpsfsi::engine::operators::{laplacian_row, Cloud, LatticeConstants, Normalisation};
 use mpsfsi::engine::pressure::{solve, CsrMatrix, SolveParams};
+use mpsfsi::math::{Real, Vec2};
 
 const H: Real = 0.1;
 const RATIOS: [usize; 6] = [2, 4, 8, 16, 32, 64];

@@ -13,9 +13,9 @@
 use super::dirichlet_1d::solve_direct;
 use mpsfsi::case::LaplacianKind;
 use mpsfsi::engine::kernel::WendlandC2;
-use mpsfsi::engine::math::{Real, Vec2};
 use mpsfsi::engine::neighbors::NeighborList;
 use mpsfsi::engine::operators::{laplacian_row, Cloud, LatticeConstants, Normalisation};
+use mpsfsi::math::{Real, Vec2};
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 

@@ -6,12 +6,12 @@
 
 use mpsfsi::case::{parse_case_str, GradientKind, LaplacianKind};
 use mpsfsi::engine::kernel::WendlandC2;
-use mpsfsi::engine::math::{Real, Vec2};
 use mpsfsi::engine::neighbors::NeighborList;
 use mpsfsi::engine::operators::{
     divergence, gradient, gradient_row, laplacian, laplacian_row, Cloud, LatticeConstants,
     Normalisation,
 };
+use mpsfsi::math::{Real, Vec2};
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 

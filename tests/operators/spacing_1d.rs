@@ -16,9 +16,9 @@
 
 use mpsfsi::case::{GradientKind, LaplacianKind};
 use mpsfsi::engine::kernel::Koshizuka;
-use mpsfsi::engine::math::{Real, Vec2};
 use mpsfsi::engine::neighbors::NeighborList;
 use mpsfsi::engine::operators::{gradient_row, laplacian_row, Cloud, Normalisation};
+use mpsfsi::math::{Real, Vec2};
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 use std::f64::consts::PI;

@@ -9,8 +9,8 @@ use mpsfsi::bench::scaling::{
 use mpsfsi::bench::stress::{
     chine_time, load_drift, perturb_positions, stress_table, window_mean, StressOutcome,
 };
-use mpsfsi::engine::math::Vec2;
 use mpsfsi::engine::StageTimes;
+use mpsfsi::math::Vec2;
 
 #[test]
 fn the_power_law_fit_recovers_an_exact_exponent_and_ignores_unusable_points() {

@@ -1,7 +1,7 @@
 use crate::{scratch_dir, small_tank};
 use mpsfsi::case::parse_case_value;
-use mpsfsi::engine::math::Vec2;
 use mpsfsi::engine::Simulation;
+use mpsfsi::math::Vec2;
 use mpsfsi::output::snapshots::SnapshotWriter;
 use mpsfsi::output::vtk::{parse_pvd, parse_vtu, pvd_string, vtu_string, PvdEntry, VtuFields};
 use rand::{Rng, SeedableRng};

@@ -4,7 +4,7 @@
 
 use super::Cloud;
 use crate::engine::kernel::Kernel;
-use crate::engine::math::Real;
+use crate::math::Real;
 
 /// n_i over the fluid neighbours (w vanishes at and beyond r_e).
 #[inline]

@@ -9,7 +9,7 @@ use super::gradient::gradient_row;
 use super::{Cloud, Normalisation};
 use crate::case::GradientKind;
 use crate::engine::kernel::Kernel;
-use crate::engine::math::{Real, Vec2};
+use crate::math::{Real, Vec2};
 use rayon::prelude::*;
 
 /// ⟨∇·u⟩ at every particle.

@@ -22,7 +22,7 @@ use super::moments::moments;
 use super::{Cloud, Normalisation};
 use crate::case::GradientKind;
 use crate::engine::kernel::Kernel;
-use crate::engine::math::{Mat2, Real, Vec2};
+use crate::math::{Mat2, Real, Vec2};
 use rayon::prelude::*;
 
 /// The GC matrix C = [(1/n0) A]⁻¹ from the moments A = Σ w r rᵀ / r² (fluid and virtual

@@ -32,7 +32,7 @@ use super::moments::{chl_moment, chl_weight, moments, rcond};
 use super::{Cloud, Normalisation};
 use crate::case::LaplacianKind;
 use crate::engine::kernel::Kernel;
-use crate::engine::math::{Mat2, Real, Vec2};
+use crate::math::{Mat2, Real, Vec2};
 use nalgebra::{SMatrix, SVector};
 use rayon::prelude::*;
 

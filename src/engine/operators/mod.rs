@@ -35,7 +35,7 @@ pub use second_derivatives::{
     anisotropic_second_derivatives, second_derivatives, SecondDerivatives,
 };
 
-use super::math::{Real, Vec2};
+use crate::math::{Real, Vec2};
 use super::neighbors::NeighborList;
 
 /// The particle cloud an operator acts on. The neighbour list may have been built with a

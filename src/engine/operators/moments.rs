@@ -10,7 +10,7 @@
 
 use super::Cloud;
 use crate::engine::kernel::Kernel;
-use crate::engine::math::{Mat2, Real, Vec2};
+use crate::math::{Mat2, Real, Vec2};
 
 /// Reciprocal condition number (smallest over largest eigenvalue modulus) of a symmetric 2×2 matrix.
 pub(crate) fn rcond(m: &Mat2) -> Real {

@@ -11,7 +11,7 @@
 use super::moments::moments;
 use super::Cloud;
 use crate::engine::kernel::Kernel;
-use crate::engine::math::{Real, Vec2};
+use crate::math::{Real, Vec2};
 use rayon::prelude::*;
 
 /// ∂xx, ∂yy and ∂xy of a field at one particle.

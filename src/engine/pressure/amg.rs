@@ -14,7 +14,7 @@
 //! the number of threads.
 
 use super::CsrMatrix;
-use crate::engine::math::Real;
+use crate::math::Real;
 use nalgebra::{DMatrix, DVector};
 use rayon::prelude::*;
 use std::borrow::Cow;

@@ -1,7 +1,7 @@
 //! Compressed sparse row matrix with a parallel, deterministic product, and the bridge
 //! to faer's sparse types for the direct factorisation.
 
-use crate::engine::math::Real;
+use crate::math::Real;
 use rayon::prelude::*;
 
 use super::{SolveError, SolveInfo};

@@ -4,7 +4,7 @@
 
 use super::pcg::{axpy, dot};
 use super::{SolveError, SolveInfo, SolveParams};
-use crate::engine::math::Real;
+use crate::math::Real;
 
 /// Solve A x = b, A given by `apply(v, out)`, with the preconditioner
 /// `precondition(r, z)` (z ≈ A⁻¹ r); `x` holds the initial guess on entry.

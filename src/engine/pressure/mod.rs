@@ -20,7 +20,7 @@ pub use reuse::{
 };
 
 use crate::case::SolverKind;
-use crate::engine::math::Real;
+use crate::math::Real;
 
 /// Process-wide seconds spent building preconditioners (IC(0) factor, AMG hierarchy),
 /// for benchmarks that split a solve into setup and iterations.

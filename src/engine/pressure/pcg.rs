@@ -4,7 +4,7 @@
 
 use super::amg::Hierarchy;
 use super::{CsrMatrix, SolveError, SolveInfo, SolveParams};
-use crate::engine::math::{deterministic_sum, Real};
+use crate::math::{deterministic_sum, Real};
 use rayon::prelude::*;
 
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]

@@ -31,7 +31,7 @@
 use super::amg::Hierarchy;
 use super::pcg::{count_setup, pcg_with};
 use super::{CsrMatrix, SolveError, SolveInfo, SolveParams};
-use crate::engine::math::Real;
+use crate::math::Real;
 
 /// What a reused hierarchy does with its coarse operators.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]

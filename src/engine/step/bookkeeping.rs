@@ -2,7 +2,7 @@
 //! is checked for divergence.
 
 use super::density::neighbor_list;
-use crate::engine::math::Real;
+use crate::math::Real;
 use crate::engine::simulation::{SimError, Simulation};
 use crate::engine::walls::WallContacts;
 use rayon::prelude::*;

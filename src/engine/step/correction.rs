@@ -2,7 +2,7 @@
 
 use crate::case::{GradientKind, WallLoadKind};
 use crate::engine::kernel::Kernel;
-use crate::engine::math::{vec2, Real, Vec2};
+use crate::math::{vec2, Real, Vec2};
 use crate::engine::operators::{
     gradient_row, minimum_over_neighbourhood, pressure_gradient, Cloud, Normalisation,
     PressureGradient,

@@ -4,7 +4,7 @@
 
 use crate::case::WallKinematics;
 use crate::engine::kernel::Kernel;
-use crate::engine::math::{Real, Vec2};
+use crate::math::{Real, Vec2};
 use crate::engine::neighbors::NeighborList;
 use crate::engine::operators::{self, hs_divergence, Cloud};
 use crate::engine::params::MpsParameters;

@@ -23,7 +23,7 @@
 //! at 1 cm) each apply the gradient, the divergence and an AMG cycle.
 
 use crate::engine::kernel::Kernel;
-use crate::engine::math::{Mat2, Real, Vec2};
+use crate::math::{Mat2, Real, Vec2};
 use crate::engine::operators::corrected_gradient_matrix;
 use crate::engine::params::DIM;
 use crate::engine::pressure::{self, SolveParams};

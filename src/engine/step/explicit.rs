@@ -4,7 +4,7 @@
 use super::walls::KernelWeights;
 use crate::case::ViscosityKind;
 use crate::engine::kernel::Kernel;
-use crate::engine::math::{vec2, Real, Vec2};
+use crate::math::{vec2, Real, Vec2};
 use crate::engine::params::DIM;
 use crate::engine::simulation::{Simulation, WallLoad};
 use rayon::prelude::*;

@@ -1,7 +1,7 @@
 //! Free-surface detection and the Dirichlet value of surface particles.
 
 use crate::engine::kernel::Kernel;
-use crate::engine::math::{vec2, Real, Vec2};
+use crate::math::{vec2, Real, Vec2};
 use crate::engine::simulation::Simulation;
 use rayon::prelude::*;
 

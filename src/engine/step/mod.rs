@@ -34,7 +34,7 @@ mod walls;
 
 use super::config::Projection;
 use super::kernel::Kernel;
-use super::math::Real;
+use crate::math::Real;
 use super::simulation::{SimError, Simulation, StageTimes, StepInfo, WallLoad};
 use super::walls::WallContacts;
 use crate::case::WallLoadKind;

@@ -3,7 +3,7 @@
 
 use crate::engine::config::SpacingControl;
 use crate::engine::kernel::Kernel;
-use crate::engine::math::{Real, Vec2};
+use crate::math::{Real, Vec2};
 use crate::engine::simulation::{Simulation, WallLoad};
 use crate::engine::walls::{moment_about, PlacedWall};
 use rayon::prelude::*;

@@ -3,7 +3,7 @@
 
 use crate::case::LaplacianKind;
 use crate::engine::kernel::Kernel;
-use crate::engine::math::Real;
+use crate::math::Real;
 use crate::engine::simulation::Simulation;
 use crate::engine::walls::{PlacedWall, WallKernels, WallWeights};
 use std::marker::PhantomData;

@@ -14,12 +14,11 @@
 //! Virtual pressures are extrapolated from the particle (Neumann condition), so the
 //! wall adds no unknowns to the pressure equation; see `pressure`.
 
-pub mod geometry;
 pub mod pressure_load;
 
-use crate::engine::math::{cross, perp, Mat2, Real, Vec2};
+use crate::geometry::{closest_on_segment, inside, signed_distance, WallShape};
+use crate::math::{cross, perp, Mat2, Real, Vec2};
 use crate::engine::operators::VirtualPoints;
-use geometry::{closest_on_segment, inside, signed_distance, WallShape};
 use rayon::prelude::*;
 
 /// Rigid motion state of a wall object (fixed walls: all zero).

@@ -17,9 +17,9 @@
 //! values are clipped (the fluid cannot pull on a wall). Only particles on the fluid
 //! side of a segment count.
 
-use super::geometry::inside;
+use crate::geometry::inside;
 use super::{moment_about, PlacedWall};
-use crate::engine::math::{perp, Real, Vec2};
+use crate::math::{perp, Real, Vec2};
 use crate::engine::neighbors::CellGrid;
 use rayon::prelude::*;
 

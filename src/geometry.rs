@@ -1,12 +1,14 @@
-//! Wall geometry: the surface segments the fluid sees and the closed loops that
-//! bound the solid behind them (even-odd rule), in the object's own frame.
+//! Polygon geometry shared by case validation, the scene, the walls and the
+//! coupling: areas, centroids, closest points, even-odd containment, segment
+//! crossings, and [`WallShape`] (the surface segments the fluid sees and the closed
+//! loops that bound the solid behind them, in the object's own frame).
 //!
 //! An open tank polyline becomes a solid by offsetting it to the side away from the
 //! fluid by a thickness larger than any kernel radius (mitred joins), so a concave
 //! tank corner is solid on 270° and a convex apex on its true angle: the wall terms
 //! sum a virtual lattice clipped to this solid, never a flat half-plane.
 
-use crate::engine::math::{cross, perp, rotate, Real, Vec2};
+use crate::math::{cross, perp, rotate, Real, Vec2};
 
 /// A wall object in its own frame: fixed walls have the identity pose.
 #[derive(Debug, Clone)]
