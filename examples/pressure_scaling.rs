@@ -25,7 +25,7 @@ fn main() {
     let weight = n as f64 * case.fluid.density * case.particle_spacing.powi(2) * 9.81;
     println!(
         "{:?} threads {} particles {} ms/step {:.1} solve ms/step {:.1} ({:.0}%) setup ms/step {:.1} ({:.0}% of solve) iters/step {:.1} particle-steps/s {:.3e} load/weight {:.4} {:?}",
-        sim.scheme.solver,
+        sim.config.method.solver.kind,
         rayon::current_num_threads(),
         n,
         wall / s * 1e3,

@@ -122,6 +122,7 @@ fn a_lone_runaway_particle_is_removed_and_the_tank_stays_hydrostatic() {
     assert_eq!(sim.stats.runaways, 1);
     assert_eq!(sim.particle_count(), 1250);
     let first = sim
+        .stats
         .first_runaway
         .clone()
         .expect("the first runaway is described");
