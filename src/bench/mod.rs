@@ -696,7 +696,9 @@ pub fn run_one(
         status: "failed".into(),
         note: String::new(),
     };
-    let case = match run_case_value(bench, spacing, &variant.scheme) {
+    let case = match run_case_value(bench, spacing, &variant.scheme)
+        .and_then(|c| case::ValidCase::new(c, &case::Limits::default()))
+    {
         Ok(c) => c,
         Err(e) => {
             result.note = format!("case rejected: {e}");

@@ -391,6 +391,8 @@ pub fn run_stress(run: &StressRun, dir: &Path) -> StressOutcome {
     let started = Instant::now();
     let outcome = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| match &run.kind {
         StressKind::Plain | StressKind::StillTank => {
+            let case = case::ValidCase::new(case.clone(), &case::Limits::default())
+                .map_err(|e| format!("invalid case: {e}"))?;
             let summary = run::run_case(&case, dir, &mut run::Quiet).map_err(|e| e.to_string())?;
             let mut o = out.clone();
             o.status = status_text(summary.status);
