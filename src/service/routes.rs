@@ -5,7 +5,7 @@ use super::error::ApiError;
 use super::series::{self, SeriesFile};
 use super::store::{Admission, JobRow, JobStatus};
 use super::workers::Jobs;
-use crate::case::{parse_case_value, validate, Limits};
+use crate::case::{parse_case_value, validate};
 use axum::body::Bytes;
 use axum::extract::rejection::{BytesRejection, QueryRejection};
 use axum::extract::{DefaultBodyLimit, Path, Query, State};
@@ -169,13 +169,7 @@ async fn submit_job(
     let value: Value =
         serde_json::from_str(&case_text).map_err(|e| ApiError::MalformedJson(e.to_string()))?;
     let case = parse_case_value(value).map_err(ApiError::InvalidCase)?;
-    validate(
-        &case,
-        &Limits {
-            max_particles: config.max_particles,
-        },
-    )
-    .map_err(ApiError::InvalidCase)?;
+    validate(&case, &config.limits()).map_err(ApiError::InvalidCase)?;
     if state.jobs.is_stopping() {
         return Err(ApiError::ShuttingDown);
     }

@@ -3,7 +3,7 @@
 
 use crate::helpers::{fresh_data_dir, spawn_app, tiny_case};
 use crate::schema::assert_conforms;
-use mpsfsi::case::parse_case_value;
+use mpsfsi::case::{parse_case_value, Limits, ValidCase};
 use mpsfsi::run::{run_case, Quiet};
 use serde_json::Value;
 
@@ -30,7 +30,8 @@ async fn submitted_case_succeeds_and_serves_the_same_files_as_run_case() {
 
     // The same case run directly, into another directory.
     let direct_dir = fresh_data_dir("direct");
-    let parsed = parse_case_value(case.clone()).unwrap();
+    let parsed =
+        ValidCase::new(parse_case_value(case.clone()).unwrap(), &Limits::default()).unwrap();
     let out = direct_dir.clone();
     let summary = tokio::task::spawn_blocking(move || run_case(&parsed, &out, &mut Quiet))
         .await
