@@ -34,7 +34,8 @@ pub mod stress;
 
 use crate::case::{self, Case, Scheme};
 use crate::engine::math::Real;
-use crate::output::filter::{leading_deadrise, parse_loads_csv, LoadRow};
+use crate::output::filter::leading_deadrise;
+use crate::output::loads_csv::{parse_loads_csv, LoadRow};
 use crate::output::snapshots::{PVD_NAME, SNAPSHOT_DIR};
 use crate::output::vtk::{parse_pvd, parse_vtu};
 use crate::run::{self, RunStatus, Summary};

@@ -28,7 +28,7 @@ use super::measure::relative_error;
 use crate::case::{self, Case, Motion};
 use crate::engine::math::{Real, Vec2};
 use crate::engine::Simulation;
-use crate::output::filter::parse_loads_csv;
+use crate::output::loads_csv::parse_loads_csv;
 use crate::run::{self, RunStatus};
 use serde_json::Value;
 use std::fmt::Write as _;

@@ -4,7 +4,7 @@
 //! Every data series is one `<polyline>` of stroke width 2 (grid and axis lines are
 //! polylines of width 1; legend keys are rectangles), so the series can be counted.
 
-use super::filter::parse_loads_csv;
+use super::loads_csv::parse_loads_csv;
 use plotters::prelude::*;
 use std::collections::BTreeMap;
 
