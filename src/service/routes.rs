@@ -362,13 +362,12 @@ async fn get_loads_svg(
 ) -> Result<Response, ApiError> {
     let row = find_job(&state, &id).await?;
     let text = read_series(&state, &row, series::LOADS).await?;
+    let text = String::from_utf8(text).map_err(ApiError::internal)?;
     let title = format!("{} ({}): loads", row.name, row.status.as_str());
-    let svg = tokio::task::spawn_blocking(move || {
-        super::plot::loads_svg(&title, &series::load_rows(&text))
-    })
-    .await
-    .map_err(ApiError::internal)?
-    .map_err(ApiError::internal)?;
+    let svg = tokio::task::spawn_blocking(move || crate::output::plot::loads_svg(&text, &title))
+        .await
+        .map_err(ApiError::internal)?
+        .map_err(ApiError::internal)?;
     Ok(([(header::CONTENT_TYPE, "image/svg+xml")], svg).into_response())
 }
 
