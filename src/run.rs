@@ -2,7 +2,7 @@
 //! through an [`Observer`], so the CLI (progress bar) and the service (job record,
 //! DELETE) drive the same loop. A failed run keeps everything it wrote and says why.
 
-use crate::case::{self, Case, CaseError, Limits, Scheme};
+use crate::case::{self, Case, Scheme, ValidCase};
 use crate::coupling::Coupling;
 use crate::engine::{SimError, Simulation, StageTimes};
 use crate::math::{vec2, Real};
@@ -89,8 +89,6 @@ pub struct Summary {
 
 #[derive(Debug, thiserror::Error)]
 pub enum RunError {
-    #[error("invalid case: {0}")]
-    Case(#[from] CaseError),
     #[error("cannot write the run directory: {0}")]
     Io(#[from] std::io::Error),
 }
@@ -113,13 +111,14 @@ pub fn estimate_steps(case: &Case) -> u64 {
     (case.time.end / dt).ceil() as u64
 }
 
-/// Validate, build, step to the end time (or failure / cancellation), write the run directory.
+/// Build, step to the end time (or failure / cancellation), write the run directory. The
+/// case was validated by the caller, against the caller's limits.
 pub fn run_case(
-    case: &Case,
+    case: &ValidCase,
     out_dir: &Path,
     observer: &mut dyn Observer,
 ) -> Result<Summary, RunError> {
-    case::validate(case, &Limits::default())?;
+    let case: &Case = case;
     let started = Instant::now();
     let mut sim = Simulation::new(case);
     let mut coupling = Coupling::new(case, &sim);

@@ -34,7 +34,8 @@ pub mod stress;
 
 use crate::case::{self, Case, Scheme};
 use crate::engine::math::Real;
-use crate::output::filter::{leading_deadrise, parse_loads_csv, LoadRow};
+use crate::output::filter::leading_deadrise;
+use crate::output::loads_csv::{parse_loads_csv, LoadRow};
 use crate::output::snapshots::{PVD_NAME, SNAPSHOT_DIR};
 use crate::output::vtk::{parse_pvd, parse_vtu};
 use crate::run::{self, RunStatus, Summary};
@@ -696,7 +697,9 @@ pub fn run_one(
         status: "failed".into(),
         note: String::new(),
     };
-    let case = match run_case_value(bench, spacing, &variant.scheme) {
+    let case = match run_case_value(bench, spacing, &variant.scheme)
+        .and_then(|c| case::ValidCase::new(c, &case::Limits::default()))
+    {
         Ok(c) => c,
         Err(e) => {
             result.note = format!("case rejected: {e}");

@@ -269,17 +269,16 @@ pub fn tank_case_value(target: usize, steps: u64) -> Value {
     })
 }
 
-fn parse(v: Value) -> io::Result<Case> {
+fn parse(v: Value) -> io::Result<case::ValidCase> {
     let case = case::parse_case_value(v)
         .map_err(|e| io::Error::new(io::ErrorKind::InvalidData, e.to_string()))?;
-    case::validate(
-        &case,
+    case::ValidCase::new(
+        case,
         &Limits {
             max_particles: usize::MAX,
         },
     )
-    .map_err(|e| io::Error::new(io::ErrorKind::InvalidData, e.to_string()))?;
-    Ok(case)
+    .map_err(|e| io::Error::new(io::ErrorKind::InvalidData, e.to_string()))
 }
 
 // ---------------------------------------------------------------- scaling

@@ -28,7 +28,7 @@ use super::measure::relative_error;
 use crate::case::{self, Case, Motion};
 use crate::engine::math::{Real, Vec2};
 use crate::engine::Simulation;
-use crate::output::filter::parse_loads_csv;
+use crate::output::loads_csv::parse_loads_csv;
 use crate::run::{self, RunStatus};
 use serde_json::Value;
 use std::fmt::Write as _;
@@ -391,6 +391,8 @@ pub fn run_stress(run: &StressRun, dir: &Path) -> StressOutcome {
     let started = Instant::now();
     let outcome = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| match &run.kind {
         StressKind::Plain | StressKind::StillTank => {
+            let case = case::ValidCase::new(case.clone(), &case::Limits::default())
+                .map_err(|e| format!("invalid case: {e}"))?;
             let summary = run::run_case(&case, dir, &mut run::Quiet).map_err(|e| e.to_string())?;
             let mut o = out.clone();
             o.status = status_text(summary.status);

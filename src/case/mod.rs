@@ -36,6 +36,28 @@ impl CaseError {
     }
 }
 
+/// A case that passed [`validate`] against the limits of whoever will run it (the CLI's,
+/// the service's configuration): the only thing `run::run_case` accepts, so a case is
+/// validated once, by the caller, and never again against other limits. Read-only: a
+/// change could make it invalid.
+#[derive(Debug, Clone, PartialEq)]
+pub struct ValidCase(Case);
+
+impl ValidCase {
+    /// Validate `case` against `limits`.
+    pub fn new(case: Case, limits: &Limits) -> Result<Self, CaseError> {
+        validate(&case, limits)?;
+        Ok(Self(case))
+    }
+}
+
+impl std::ops::Deref for ValidCase {
+    type Target = Case;
+    fn deref(&self) -> &Case {
+        &self.0
+    }
+}
+
 /// A complete simulation case.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize, JsonSchema)]
 #[serde(deny_unknown_fields)]

@@ -2,18 +2,17 @@
 
 use super::progress::ProgressBarObserver;
 use super::{report_case_error, EXIT_ERROR, EXIT_FAILED_RUN};
-use mpsfsi::case::{load_case_file, validate, Limits};
-use mpsfsi::run::{run_case, RunError, RunStatus};
+use mpsfsi::case::{load_case_file, Limits, ValidCase};
+use mpsfsi::run::{run_case, RunStatus};
 use std::path::Path;
 
 pub fn run(case_path: &Path, out: &Path, overrides: &[String]) -> i32 {
-    let case = match load_case_file(case_path, overrides) {
+    let case = match load_case_file(case_path, overrides)
+        .and_then(|case| ValidCase::new(case, &Limits::default()))
+    {
         Ok(case) => case,
         Err(e) => return report_case_error(&e),
     };
-    if let Err(e) = validate(&case, &Limits::default()) {
-        return report_case_error(&e);
-    }
     if let Err(e) = std::fs::create_dir_all(out) {
         eprintln!(
             "error: cannot create the run directory {}: {e}",
@@ -60,7 +59,6 @@ pub fn run(case_path: &Path, out: &Path, overrides: &[String]) -> i32 {
                 }
             }
         }
-        Err(RunError::Case(e)) => report_case_error(&e),
         Err(e) => {
             eprintln!("error: {e}");
             EXIT_ERROR

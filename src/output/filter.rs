@@ -14,6 +14,7 @@
 //! not) and any window up to T (longer windows are clamped to T). Raw loads stay the
 //! reference; `loads_filtered.csv` is for reading peaks without particle noise.
 
+use super::loads_csv::parse_loads_csv;
 use crate::case::{Case, Motion};
 use crate::math::Real;
 use std::collections::BTreeMap;
@@ -197,60 +198,6 @@ pub fn write_filtered_loads(run_dir: &Path, window_s: f64) -> io::Result<()> {
     std::fs::rename(tmp, run_dir.join("loads_filtered.csv"))
 }
 
-/// One row of `loads.csv`.
-#[derive(Debug, Clone, PartialEq)]
-pub struct LoadRow {
-    pub time: Real,
-    pub body: String,
-    pub fx: Real,
-    pub fy: Real,
-    pub mz: Real,
-}
-
-fn invalid(message: String) -> io::Error {
-    io::Error::new(io::ErrorKind::InvalidData, message)
-}
-
-/// Parse the text of `loads.csv` (header `time,body,fx,fy,mz`).
-pub fn parse_loads_csv(text: &str) -> io::Result<Vec<LoadRow>> {
-    let mut reader = csv::ReaderBuilder::new()
-        .has_headers(true)
-        .from_reader(text.as_bytes());
-    let headers = reader
-        .headers()
-        .map_err(|e| invalid(format!("loads.csv header: {e}")))?
-        .clone();
-    let expected: Vec<&str> = super::LOADS_HEADER.split(',').collect();
-    if headers.iter().collect::<Vec<_>>() != expected {
-        return Err(invalid(format!(
-            "loads.csv header is {:?}, expected {}",
-            headers,
-            super::LOADS_HEADER
-        )));
-    }
-    let mut rows = Vec::new();
-    for (line, record) in reader.records().enumerate() {
-        let record = record.map_err(|e| invalid(format!("loads.csv row {}: {e}", line + 2)))?;
-        let num = |i: usize| -> io::Result<Real> {
-            record[i].trim().parse().map_err(|e| {
-                invalid(format!(
-                    "loads.csv row {} column {}: {e}",
-                    line + 2,
-                    expected[i]
-                ))
-            })
-        };
-        rows.push(LoadRow {
-            time: num(0)?,
-            body: record[1].to_string(),
-            fx: num(2)?,
-            fy: num(3)?,
-            mz: num(4)?,
-        });
-    }
-    Ok(rows)
-}
-
 /// The filtered `loads.csv` text (see the module docs).
 pub fn filter_loads_csv(text: &str, window_s: f64) -> io::Result<String> {
     let rows = parse_loads_csv(text)?;
@@ -263,8 +210,9 @@ pub fn filter_loads_csv(text: &str, window_s: f64) -> io::Result<String> {
     for indices in by_body.values() {
         let times: Vec<Real> = indices.iter().map(|&i| rows[i].time).collect();
         if times.windows(2).any(|w| w[1] <= w[0]) || times.first().is_some_and(|t| *t <= 0.0) {
-            return Err(invalid(
-                "loads.csv times of a body must be positive and increase".to_string(),
+            return Err(io::Error::new(
+                io::ErrorKind::InvalidData,
+                "loads.csv times of a body must be positive and increase",
             ));
         }
         for c in 0..3 {

@@ -4,7 +4,7 @@
 //! Every data series is one `<polyline>` of stroke width 2 (grid and axis lines are
 //! polylines of width 1; legend keys are rectangles), so the series can be counted.
 
-use super::filter::parse_loads_csv;
+use super::loads_csv::parse_loads_csv;
 use plotters::prelude::*;
 use std::collections::BTreeMap;
 
@@ -57,7 +57,8 @@ fn padded_range(values: impl Iterator<Item = f64>) -> (f64, f64) {
 
 /// The load history of `loads.csv` (text with the header `time,body,fx,fy,mz`) as
 /// an SVG document: three stacked panels, fx and fy in N/m and mz in N·m/m against
-/// time in s, one line per body in each panel.
+/// time in s, one line per body in each panel. The text of a file a running job is
+/// still appending to is passed up to its last newline.
 pub fn loads_svg(csv_text: &str, title: &str) -> Result<String, PlotError> {
     let rows = parse_loads_csv(csv_text).map_err(|e| PlotError::Data(e.to_string()))?;
     // body -> (t, [fx, fy, mz]) in file order; bodies in order of first appearance
@@ -84,6 +85,15 @@ pub fn loads_svg(csv_text: &str, title: &str) -> Result<String, PlotError> {
         let root = SVGBackend::with_string(&mut svg, (900, 960)).into_drawing_area();
         root.fill(&WHITE).map_err(drawing)?;
         let root = root.titled(title, ("sans-serif", 22)).map_err(drawing)?;
+        if rows.is_empty() {
+            // a queued job, or one that has not reached its first sample time
+            root.draw(&Text::new(
+                "no load samples yet",
+                (350, 400),
+                ("sans-serif", 18),
+            ))
+            .map_err(drawing)?;
+        }
         let areas = root.split_evenly((3, 1));
         for (c, (area, (label, caption))) in areas.iter().zip(panels).enumerate() {
             let (lo, hi) = padded_range(rows.iter().map(|r| [r.fx, r.fy, r.mz][c]));

@@ -2,6 +2,7 @@
 //! environment variable (flags win). `mpsfsi serve` flattens [`Config`] into its
 //! arguments; tests build one with [`Config::for_tests`].
 
+use crate::case::Limits;
 use std::net::SocketAddr;
 use std::path::PathBuf;
 use std::time::Duration;
@@ -43,6 +44,14 @@ impl Config {
             max_particles: 500_000,
             max_body_bytes: 1 << 20,
             shutdown_grace_s: 0.0,
+        }
+    }
+
+    /// The case limits of this service: a case is validated against them when submitted
+    /// and again when a worker runs it (a job queued before a restart met the old ones).
+    pub fn limits(&self) -> Limits {
+        Limits {
+            max_particles: self.max_particles,
         }
     }
 

@@ -13,7 +13,8 @@
 //!   channel and the database, and a restart re-queues what was waiting.
 //! - [`workers`]: the worker pool; `run_case` runs on blocking threads, one job at a time
 //!   per worker, with cancellation and progress through the run [`crate::run::Observer`].
-//! - [`series`] (CSV -> JSON columns) and [`plot`] (the loads SVG).
+//! - [`series`]: the run directory's CSV files as JSON columns; `loads.svg` is
+//!   [`crate::output::plot::loads_svg`] of the same complete lines.
 //!
 //! Restart semantics: a job found `running` when the service starts was interrupted by
 //! the death of the previous process and is marked `failed` with reason `interrupted`
@@ -21,7 +22,6 @@
 
 pub mod config;
 pub mod error;
-pub mod plot;
 pub mod routes;
 pub mod series;
 pub mod startup;

@@ -5,7 +5,7 @@ use super::error::ApiError;
 use super::series::{self, SeriesFile};
 use super::store::{Admission, JobRow, JobStatus};
 use super::workers::Jobs;
-use crate::case::{parse_case_value, validate, Limits};
+use crate::case::{parse_case_value, validate};
 use axum::body::Bytes;
 use axum::extract::rejection::{BytesRejection, QueryRejection};
 use axum::extract::{DefaultBodyLimit, Path, Query, State};
@@ -169,13 +169,7 @@ async fn submit_job(
     let value: Value =
         serde_json::from_str(&case_text).map_err(|e| ApiError::MalformedJson(e.to_string()))?;
     let case = parse_case_value(value).map_err(ApiError::InvalidCase)?;
-    validate(
-        &case,
-        &Limits {
-            max_particles: config.max_particles,
-        },
-    )
-    .map_err(ApiError::InvalidCase)?;
+    validate(&case, &config.limits()).map_err(ApiError::InvalidCase)?;
     if state.jobs.is_stopping() {
         return Err(ApiError::ShuttingDown);
     }
@@ -368,13 +362,12 @@ async fn get_loads_svg(
 ) -> Result<Response, ApiError> {
     let row = find_job(&state, &id).await?;
     let text = read_series(&state, &row, series::LOADS).await?;
+    let text = String::from_utf8(text).map_err(ApiError::internal)?;
     let title = format!("{} ({}): loads", row.name, row.status.as_str());
-    let svg = tokio::task::spawn_blocking(move || {
-        super::plot::loads_svg(&title, &series::load_rows(&text))
-    })
-    .await
-    .map_err(ApiError::internal)?
-    .map_err(ApiError::internal)?;
+    let svg = tokio::task::spawn_blocking(move || crate::output::plot::loads_svg(&text, &title))
+        .await
+        .map_err(ApiError::internal)?
+        .map_err(ApiError::internal)?;
     Ok(([(header::CONTENT_TYPE, "image/svg+xml")], svg).into_response())
 }
 

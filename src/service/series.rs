@@ -78,18 +78,3 @@ pub fn csv_to_columns(text: &[u8]) -> Result<Map<String, Value>, csv::Error> {
     }
     Ok(out)
 }
-
-/// `(name, time, [fx, fy, mz])` rows of loads.csv text, for the plot.
-pub fn load_rows(text: &[u8]) -> Vec<(String, f64, [f64; 3])> {
-    let mut reader = csv::ReaderBuilder::new()
-        .has_headers(true)
-        .from_reader(complete_lines(text));
-    let mut rows = Vec::new();
-    for record in reader.records().flatten() {
-        let num = |k: usize| record.get(k).and_then(|s| s.trim().parse::<f64>().ok());
-        if let (Some(t), Some(fx), Some(fy), Some(mz)) = (num(0), num(2), num(3), num(4)) {
-            rows.push((record.get(1).unwrap_or("").to_string(), t, [fx, fy, mz]));
-        }
-    }
-    rows
-}

@@ -10,7 +10,7 @@
 
 use super::store::{ClaimedJob, JobStatus, JobStore};
 use super::Config;
-use crate::case::parse_case_str;
+use crate::case::{parse_case_str, CaseError, ValidCase};
 use crate::run::{run_case, Observer, Progress, RunError, RunStatus};
 use std::collections::HashMap;
 use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering};
@@ -168,17 +168,19 @@ async fn execute(jobs: &Arc<Jobs>, job: ClaimedJob) -> Result<JobStatus, sqlx::E
         last_write: Instant::now(),
     };
     let dir = jobs.config.job_dir(&id);
+    let limits = jobs.config.limits();
     let span = tracing::Span::current();
-    let outcome = tokio::task::spawn_blocking(move || {
+    let outcome = tokio::task::spawn_blocking(move || -> Result<_, CaseError> {
         let _entered = span.enter();
         let mut observer = observer;
-        let case = parse_case_str(&job.case_json)?;
-        run_case(&case, &dir, &mut observer)
+        // this service's limits, which may differ from those the job was submitted under
+        let case = ValidCase::new(parse_case_str(&job.case_json)?, &limits)?;
+        Ok(run_case(&case, &dir, &mut observer))
     })
     .await;
 
     let (status, reason, summary, steps, time) = match outcome {
-        Ok(Ok(summary)) => {
+        Ok(Ok(Ok(summary))) => {
             let (status, reason) = match summary.status {
                 RunStatus::Succeeded => (JobStatus::Succeeded, None),
                 RunStatus::Failed => (JobStatus::Failed, summary.reason.clone()),
@@ -191,14 +193,14 @@ async fn execute(jobs: &Arc<Jobs>, job: ClaimedJob) -> Result<JobStatus, sqlx::E
             let text = serde_json::to_string(&summary).ok();
             (status, reason, text, summary.steps, summary.simulated_time)
         }
-        Ok(Err(RunError::Case(e))) => (
+        Ok(Err(e)) => (
             JobStatus::Failed,
             Some(format!("invalid case: {e}")),
             None,
             0,
             0.0,
         ),
-        Ok(Err(RunError::Io(e))) => {
+        Ok(Ok(Err(RunError::Io(e)))) => {
             tracing::error!(error = %e, "cannot write the run directory");
             (
                 JobStatus::Failed,

@@ -121,6 +121,19 @@ impl Api {
         (status, ct, r.text().await.unwrap())
     }
 
+    /// GET an SVG (asserting 200 and its content type).
+    pub async fn get_svg(&self, path: &str) -> String {
+        let r = self
+            .client
+            .get(self.url(path))
+            .send()
+            .await
+            .expect("request sent");
+        assert_eq!(r.status().as_u16(), 200);
+        assert_eq!(r.headers()["content-type"], "image/svg+xml");
+        r.text().await.unwrap()
+    }
+
     pub async fn job(&self, id: &str) -> Value {
         let (status, body) = self.get_json(&format!("/v1/jobs/{id}")).await;
         assert_eq!(status, 200, "{body}");

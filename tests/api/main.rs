@@ -6,6 +6,7 @@ mod burst;
 mod cancel;
 mod contract;
 mod helpers;
+mod limits;
 mod restart;
 mod schema;
 mod submit;

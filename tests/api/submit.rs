@@ -3,7 +3,7 @@
 
 use crate::helpers::{fresh_data_dir, spawn_app, tiny_case};
 use crate::schema::assert_conforms;
-use mpsfsi::case::parse_case_value;
+use mpsfsi::case::{parse_case_value, Limits, ValidCase};
 use mpsfsi::run::{run_case, Quiet};
 use serde_json::Value;
 
@@ -30,7 +30,8 @@ async fn submitted_case_succeeds_and_serves_the_same_files_as_run_case() {
 
     // The same case run directly, into another directory.
     let direct_dir = fresh_data_dir("direct");
-    let parsed = parse_case_value(case.clone()).unwrap();
+    let parsed =
+        ValidCase::new(parse_case_value(case.clone()).unwrap(), &Limits::default()).unwrap();
     let out = direct_dir.clone();
     let summary = tokio::task::spawn_blocking(move || run_case(&parsed, &out, &mut Quiet))
         .await
@@ -93,21 +94,30 @@ async fn submitted_case_succeeds_and_serves_the_same_files_as_run_case() {
     assert_eq!(status, 200);
     assert_conforms("GET", "/v1/jobs/{id}/bodies", 200, &bodies);
 
-    // The plot is an SVG naming the series.
-    let svg = app
-        .client
-        .get(app.url(&format!("/v1/jobs/{id}/loads.svg")))
-        .send()
-        .await
-        .unwrap();
-    assert_eq!(svg.status().as_u16(), 200);
-    assert_eq!(svg.headers()["content-type"], "image/svg+xml");
-    let svg = svg.text().await.unwrap();
+    // The plot is output::plot::loads_svg of loads.csv: an SVG naming the series, one
+    // line (stroke width 2) per body and component, one point per row.
+    let svg = app.get_svg(&format!("/v1/jobs/{id}/loads.svg")).await;
     assert!(
         svg.starts_with("<svg") && svg.contains("tank"),
         "{}",
         &svg[..svg.len().min(300)]
     );
+    let title = format!("{} (succeeded): loads", case["name"].as_str().unwrap());
+    assert_eq!(
+        svg,
+        mpsfsi::output::plot::loads_svg(&direct, &title).unwrap()
+    );
+    let lines = svg.matches("stroke-width=\"2\"").count();
+    assert_eq!(lines, 3, "fx, fy and mz of the tank");
+    for label in ["time (s)", "fx (N/m)", "fy (N/m)", "mz (N·m/m)"] {
+        assert!(svg.contains(label), "label {label:?} missing");
+    }
+    // A partial last line (a running job mid-write) is left out, not an error.
+    let loads_path = app.data_dir.join("jobs").join(&id).join("loads.csv");
+    let mut partial = std::fs::read_to_string(&loads_path).unwrap();
+    partial.push_str("1.0e-2,ta");
+    std::fs::write(&loads_path, partial).unwrap();
+    assert_eq!(app.get_svg(&format!("/v1/jobs/{id}/loads.svg")).await, svg);
 
     // The run directory keeps the case as submitted.
     let saved = std::fs::read(app.data_dir.join("jobs").join(&id).join("case.json")).unwrap();

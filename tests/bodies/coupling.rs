@@ -102,7 +102,9 @@ fn free_fall_run() -> &'static FreeFallRun {
         let dir =
             std::env::temp_dir().join(format!("mpsfsi-bodies-free-fall-{}", std::process::id()));
         let clock = std::time::Instant::now();
-        let summary = mpsfsi::run::run_case(&case, &dir, &mut mpsfsi::run::Quiet)
+        let valid = mpsfsi::case::ValidCase::new(case.clone(), &mpsfsi::case::Limits::default())
+            .expect("the shipped case is valid");
+        let summary = mpsfsi::run::run_case(&valid, &dir, &mut mpsfsi::run::Quiet)
             .expect("run failed to write");
         assert!(summary.reason.is_none(), "{:?}", summary.reason);
         let loads = csv_rows(&dir.join("loads.csv"), "wedge");

@@ -1,6 +1,6 @@
 //! The same case twice, and on 1 and 2 threads, gives byte-identical loads.csv.
 
-use mpsfsi::case::parse_case_str;
+use mpsfsi::case::{parse_case_str, Limits, ValidCase};
 use mpsfsi::run::{run_case, Quiet, RunStatus};
 
 const CASE: &str = r#"{
@@ -15,7 +15,7 @@ const CASE: &str = r#"{
 }"#;
 
 fn run_with_threads(threads: usize, tag: &str) -> (Vec<u8>, Vec<u8>) {
-    let case = parse_case_str(CASE).unwrap();
+    let case = ValidCase::new(parse_case_str(CASE).unwrap(), &Limits::default()).unwrap();
     let dir = std::env::temp_dir().join(format!("mpsfsi-determinism-{}-{tag}", std::process::id()));
     let pool = rayon::ThreadPoolBuilder::new()
         .num_threads(threads)

@@ -1,8 +1,7 @@
 use crate::scratch_dir;
 use mpsfsi::case::parse_case_value;
-use mpsfsi::output::filter::{
-    filter_window, impulse, moving_average, parse_loads_csv, write_filtered_loads,
-};
+use mpsfsi::output::filter::{filter_window, impulse, moving_average, write_filtered_loads};
+use mpsfsi::output::loads_csv::{parse_loads_csv, LoadRow};
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 
@@ -115,7 +114,7 @@ fn filtered_loads_csv_keeps_rows_and_each_bodys_impulse() {
         "the loads are smoothed"
     );
     for body in ["tank", "wedge"] {
-        let pick = |rows: &[mpsfsi::output::filter::LoadRow], c: usize| -> (Vec<f64>, Vec<f64>) {
+        let pick = |rows: &[LoadRow], c: usize| -> (Vec<f64>, Vec<f64>) {
             rows.iter()
                 .filter(|r| r.body == body)
                 .map(|r| (r.time, [r.fx, r.fy, r.mz][c]))

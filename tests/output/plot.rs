@@ -73,6 +73,7 @@ fn loads_svg_of_a_run_that_has_not_written_a_row_is_still_a_plot() {
     let svg = loads_svg("time,body,fx,fy,mz\n", "queued").unwrap();
     assert_well_formed(&svg);
     assert_eq!(polylines(&svg).len(), 0);
+    assert!(svg.contains("no load samples yet"));
 }
 
 #[test]

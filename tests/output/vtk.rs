@@ -1,5 +1,5 @@
 use crate::{scratch_dir, small_tank};
-use mpsfsi::case::parse_case_value;
+use mpsfsi::case::{parse_case_value, Limits, ValidCase};
 use mpsfsi::engine::Simulation;
 use mpsfsi::math::Vec2;
 use mpsfsi::output::snapshots::SnapshotWriter;
@@ -152,7 +152,7 @@ fn the_collection_is_valid_after_every_snapshot() {
 
 #[test]
 fn a_run_writes_one_snapshot_per_interval_with_all_particles() {
-    let case = parse_case_value(small_tank()).unwrap();
+    let case = ValidCase::new(parse_case_value(small_tank()).unwrap(), &Limits::default()).unwrap();
     let dir = scratch_dir("run-snapshots");
     let summary = mpsfsi::run::run_case(&case, &dir, &mut mpsfsi::run::Quiet).unwrap();
     assert_eq!(summary.status, mpsfsi::run::RunStatus::Succeeded);

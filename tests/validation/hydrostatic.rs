@@ -25,6 +25,7 @@
 //! and the 20 s run passes (load -0.0005 %, max speed 0.0; about 4 minutes, so ignored).
 
 use super::{read_csv, shipped_case};
+use mpsfsi::case::{Limits, ValidCase};
 use mpsfsi::run::{run_case, Quiet, RunStatus};
 
 #[test]
@@ -40,7 +41,11 @@ fn still_water_carries_its_weight_for_twenty_seconds() {
 
 fn still_water(end: f64) {
     let end_set = format!("time.end={end}");
-    let case = shipped_case("hydrostatic.json", &[end_set.as_str()]);
+    let case = ValidCase::new(
+        shipped_case("hydrostatic.json", &[end_set.as_str()]),
+        &Limits::default(),
+    )
+    .unwrap();
     // one directory per run: the 2 s and 20 s tests may run at once
     let dir =
         std::env::temp_dir().join(format!("mpsfsi-hydrostatic-{}-{end}s", std::process::id()));

@@ -14,11 +14,16 @@
 use super::shipped_case;
 use mpsfsi::bench::measure::{exponential_decay_rate, oscillation_peaks};
 use mpsfsi::bench::reference::{exact_energy_decay, lighthill_energy_decay, wave_frequency};
+use mpsfsi::case::{Limits, ValidCase};
 use mpsfsi::run::{run_case, Quiet, RunStatus};
 use std::f64::consts::PI;
 
 fn kinetic_energy_peaks(overrides: &[&str], label: &str) -> Vec<(f64, f64)> {
-    let case = shipped_case("standing_wave.json", overrides);
+    let case = ValidCase::new(
+        shipped_case("standing_wave.json", overrides),
+        &Limits::default(),
+    )
+    .unwrap();
     let dir = std::path::Path::new(env!("CARGO_TARGET_TMPDIR")).join(label);
     let summary = run_case(&case, &dir, &mut Quiet).expect("the run directory is writable");
     assert_eq!(summary.status, RunStatus::Succeeded, "{:?}", summary.reason);
