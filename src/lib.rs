@@ -3,6 +3,7 @@
 //!
 //! Data flows one way: [`case`] -> [`engine`] scene -> step pipeline -> [`output`].
 
+pub mod analysis;
 pub mod bench;
 pub mod case;
 pub mod coupling;

@@ -1,5 +1,5 @@
-//! Published and computed reference answers the benchmark compares with, each with its
-//! source (all from `../shared/references.md`).
+//! Published and computed reference answers the benchmark and the tests compare with, each
+//! with its source (all from `../shared/references.md`).
 
 use crate::engine::math::Real;
 

@@ -1,5 +1,5 @@
-//! The error measures of the benchmark, as pure functions of the run's outputs so that
-//! each can be tested on synthetic data.
+//! The error measures of the benchmark and the validation tests, as pure functions of a
+//! run's outputs so that each can be tested on synthetic data.
 
 use super::reference::{MARTIN_MOYCE_SURGE, SURGE_COMPARISON_RANGE};
 use crate::engine::math::Real;
