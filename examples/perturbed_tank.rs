@@ -1,7 +1,8 @@
 //! Diagnostic: the still tank with its lattice perturbed by ±0.2 l0 (the stress scene),
 //! printing the tank load against the water weight and the largest speed every 0.25 s.
 //! `cargo run --release --example perturbed_tank -- cases/hydrostatic.json END [PATH=VALUE]...`
-use mpsfsi::bench::stress::{perturb_positions, PERTURBATION, PERTURBATION_SEED};
+use mpsfsi::bench::perturb::{perturb_positions, PERTURBATION_SEED};
+use mpsfsi::bench::stress::PERTURBATION;
 use mpsfsi::case::load_case_file;
 use mpsfsi::engine::Simulation;
 

@@ -5,6 +5,7 @@
 //! [`math`] (scalar and vector types) and [`geometry`] (polygon predicates and wall
 //! shapes) sit below both `case` and `engine`.
 
+pub mod analysis;
 pub mod bench;
 pub mod case;
 pub mod coupling;

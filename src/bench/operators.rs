@@ -13,11 +13,15 @@
 //! both proportional to r_e/r³, so they coincide on the regular lattice. Variant names
 //! are those of the case file's `scheme` block where the variant is a scheme choice.
 
+use super::perturb::SplitMix64;
+use super::stats::fit_power_law;
 use crate::case::{GradientKind, LaplacianKind};
 use crate::engine::kernel::Koshizuka;
-use crate::engine::math::{Real, Vec2};
 use crate::engine::neighbors::NeighborList;
 use crate::engine::operators::{self, Cloud, LatticeConstants, Normalisation};
+use crate::math::{Real, Vec2};
+use std::io;
+use std::path::Path;
 
 /// One line of the convergence table.
 #[derive(Debug, Clone, PartialEq)]
@@ -116,20 +120,6 @@ impl LatticeKind {
     }
 }
 
-/// SplitMix64: a small seeded generator so the study needs no dev-dependency.
-struct SplitMix64(u64);
-
-impl SplitMix64 {
-    fn next_unit(&mut self) -> Real {
-        self.0 = self.0.wrapping_add(0x9E37_79B9_7F4A_7C15);
-        let mut z = self.0;
-        z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
-        z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
-        z ^= z >> 31;
-        (z >> 11) as Real / (1u64 << 53) as Real
-    }
-}
-
 /// Positions covering [0,1]² extended by r_e, and the indices of those inside [0,1]².
 pub fn lattice(kind: LatticeKind, dx: Real, seed: u64) -> (Vec<Vec2>, Vec<usize>) {
     let re = RADIUS_RATIO * dx;
@@ -137,7 +127,7 @@ pub fn lattice(kind: LatticeKind, dx: Real, seed: u64) -> (Vec<Vec2>, Vec<usize>
         LatticeKind::Anisotropic => (dx / 2.0, dx),
         _ => (dx, dx),
     };
-    let mut rng = SplitMix64(seed);
+    let mut rng = SplitMix64::new(seed);
     let margin_x = (re / hx).ceil() as i64 + 1;
     let margin_y = (re / hy).ceil() as i64 + 1;
     let (nx, ny) = ((1.0 / hx).round() as i64, (1.0 / hy).round() as i64);
@@ -147,8 +137,8 @@ pub fn lattice(kind: LatticeKind, dx: Real, seed: u64) -> (Vec<Vec2>, Vec<usize>
         for a in -margin_x..=nx + margin_x {
             let mut p = Vec2::new(a as Real * hx, b as Real * hy);
             if kind == LatticeKind::Perturbed {
-                p.x += (2.0 * rng.next_unit() - 1.0) * 0.2 * dx;
-                p.y += (2.0 * rng.next_unit() - 1.0) * 0.2 * dx;
+                p.x += (2.0 * rng.unit() - 1.0) * 0.2 * dx;
+                p.y += (2.0 * rng.unit() - 1.0) * 0.2 * dx;
             }
             if (0.0..=1.0).contains(&p.x) && (0.0..=1.0).contains(&p.y) {
                 inside.push(pos.len());
@@ -283,24 +273,10 @@ fn classic_gradient_row(cloud: &Cloud, i: usize) -> Vec<(usize, Vec2)> {
     operators::gradient_row::<Koshizuka>(GradientKind::Cmps, cloud, Normalisation::Local, i)
 }
 
-/// Least-squares slope of ln(error) against ln(dx).
+/// Least-squares slope of ln(error) against ln(dx) over the positive errors; NaN with
+/// fewer than two.
 pub fn fitted_order(points: &[(Real, Real)]) -> Real {
-    let pts: Vec<(Real, Real)> = points
-        .iter()
-        .filter(|(_, e)| *e > 0.0)
-        .map(|&(h, e)| (h.ln(), e.ln()))
-        .collect();
-    let n = pts.len() as Real;
-    if pts.len() < 2 {
-        return Real::NAN;
-    }
-    let (mx, my) = (
-        pts.iter().map(|p| p.0).sum::<Real>() / n,
-        pts.iter().map(|p| p.1).sum::<Real>() / n,
-    );
-    let sxy: Real = pts.iter().map(|p| (p.0 - mx) * (p.1 - my)).sum();
-    let sxx: Real = pts.iter().map(|p| (p.0 - mx).powi(2)).sum();
-    sxy / sxx
+    fit_power_law(points).map_or(Real::NAN, |fit| fit.exponent)
 }
 
 /// The rows of one operator, field and lattice over [`SPACINGS`].
@@ -370,4 +346,12 @@ pub fn convergence_markdown(rows: &[ConvergenceRow]) -> String {
 /// Lattice constants of the study's weight at spacing `dx` (exposed for the tests).
 pub fn study_constants(dx: Real) -> LatticeConstants {
     LatticeConstants::compute::<Koshizuka>(dx, RADIUS_RATIO * dx, 2)
+}
+
+/// `--operators`: the convergence study as `operators.md`.
+pub fn write_operators(out_dir: &Path) -> io::Result<()> {
+    let rows = convergence_table();
+    let mut md = String::from("# Operator convergence study (paper 000 §5)\n\n");
+    md.push_str(&convergence_markdown(&rows));
+    std::fs::write(out_dir.join("operators.md"), md)
 }

@@ -1,6 +1,6 @@
-//! The stress runs of `mpsfsi bench --stress` (issue 6), beside the CFL sweep of
-//! [`super::report::cfl_sweep`]: scenes that push the scheme, each reported as
-//! completed or failed with the engine's own diagnosis. A failed run is a result,
+//! The stress study of `mpsfsi bench --stress` (issue 6): scenes that push the scheme,
+//! each reported as completed or failed with the engine's own diagnosis, and the CFL
+//! sweep of the error study's dam break ([`cfl_sweep`]). A failed run is a result,
 //! never a panic.
 //!
 //! - `dam_break_long`: the Koshizuka & Oka dam break to t = 5 s at l0 = a/40 (impact on
@@ -24,10 +24,18 @@
 //! vertical tank load against the water weight early (10-20% of the run) and late
 //! (last 10%), and the largest particle speed.
 
-use super::measure::relative_error;
+use super::cases::{cases_dir, dam_break_value, parse_case, read_case_value, set_override};
+use super::error_study::{run_one, BenchCase, Variant};
+use super::perturb::{perturb_positions, PERTURBATION_SEED};
+use super::score::Measure;
+use super::stats::window_mean;
+use super::table::{md_percent, md_text};
+use super::unwind::catch_panic;
+use crate::analysis::measure::relative_error;
+use crate::analysis::reference::KOSHIZUKA_OKA_COLUMN_WIDTH;
 use crate::case::{self, Case, Motion};
-use crate::engine::math::{Real, Vec2};
 use crate::engine::Simulation;
+use crate::math::Real;
 use crate::output::loads_csv::parse_loads_csv;
 use crate::run::{self, RunStatus};
 use serde_json::Value;
@@ -42,8 +50,6 @@ pub const PERTURBATION: Real = 0.2;
 /// long (it completed, then failed at 2.96 s after a round-off change); 0.1 and 0.12
 /// complete. The ignored test of the same run uses it too.
 pub const DAM_BREAK_LONG_CFL: Real = 0.1;
-/// Seed of the lattice perturbation.
-pub const PERTURBATION_SEED: u64 = 20_240_601;
 
 /// How a stress run is driven and measured.
 #[derive(Debug, Clone, PartialEq)]
@@ -86,58 +92,6 @@ pub struct StressOutcome {
 }
 
 // ---------------------------------------------------------------- pure parts
-
-/// A small seeded generator (SplitMix64): the same offsets on every machine.
-#[derive(Debug, Clone)]
-pub struct SplitMix64(u64);
-
-impl SplitMix64 {
-    pub fn new(seed: u64) -> Self {
-        Self(seed)
-    }
-    pub fn next_u64(&mut self) -> u64 {
-        self.0 = self.0.wrapping_add(0x9E37_79B9_7F4A_7C15);
-        let mut z = self.0;
-        z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
-        z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
-        z ^ (z >> 31)
-    }
-    /// Uniform in [-1, 1).
-    pub fn symmetric(&mut self) -> Real {
-        (self.next_u64() >> 11) as Real / (1u64 << 53) as Real * 2.0 - 1.0
-    }
-}
-
-/// Move every position by an independent uniform offset in [-amplitude, amplitude) per
-/// axis, from `seed`.
-pub fn perturb_positions(positions: &mut [Vec2], amplitude: Real, seed: u64) {
-    let mut rng = SplitMix64::new(seed);
-    for p in positions {
-        p.x += amplitude * rng.symmetric();
-        p.y += amplitude * rng.symmetric();
-    }
-}
-
-/// Time-weighted mean of interval means (`times[k]` ends the interval of `values[k]`,
-/// the first starting at `start`) over the intervals lying in [from, to].
-pub fn window_mean(
-    start: Real,
-    times: &[Real],
-    values: &[Real],
-    from: Real,
-    to: Real,
-) -> Option<Real> {
-    let (mut sum, mut span) = (0.0, 0.0);
-    let mut previous = start;
-    for (t, v) in times.iter().zip(values) {
-        if previous >= from - 1e-12 && *t <= to + 1e-12 {
-            sum += v * (t - previous);
-            span += t - previous;
-        }
-        previous = *t;
-    }
-    (span > 0.0).then(|| sum / span)
-}
 
 /// Relative errors of the mean load against `expected` over 10-20% and the last 10% of
 /// `[0, end]` (NaN where a window holds no interval).
@@ -186,26 +140,13 @@ pub fn chine_time(
 
 // ---------------------------------------------------------------- the runs
 
-fn cases_dir() -> std::path::PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR")).join("cases")
-}
-
-fn set(v: &mut Value, o: &str) -> io::Result<()> {
-    case::apply_override(v, o)
-        .map_err(|e| io::Error::new(io::ErrorKind::InvalidData, e.to_string()))
-}
-
-fn parse(v: Value) -> io::Result<Case> {
-    case::parse_case_value(v).map_err(|e| io::Error::new(io::ErrorKind::InvalidData, e.to_string()))
-}
-
 /// The wedge case at `speed` (m/s, downwards), heel `angle` (rad), spacing `l0`, ending
 /// at its first chine time. A `scheme.max_speed` of the base case is scaled with the
 /// speed (the jet tip of a 30° wedge runs at about 5 V, physically: an absolute limit
 /// set for the base speed would stop a faster entry for a physical jet).
 pub fn wedge_case(base: &Value, speed: Real, angle: Real, l0: Real) -> io::Result<Value> {
     let mut v = base.clone();
-    let base_case = parse(base.clone())?;
+    let base_case = parse_case(base.clone())?;
     let base_speed = base_case.bodies.first().and_then(|b| match &b.motion {
         Motion::Prescribed { velocity, .. } => {
             Some((velocity[0].powi(2) + velocity[1].powi(2)).sqrt())
@@ -214,16 +155,16 @@ pub fn wedge_case(base: &Value, speed: Real, angle: Real, l0: Real) -> io::Resul
     });
     if let (Some(limit), Some(v0)) = (base_case.scheme.max_speed, base_speed) {
         if v0 > 0.0 {
-            set(&mut v, &format!("scheme.max_speed={}", limit * speed / v0))?;
+            set_override(&mut v, &format!("scheme.max_speed={}", limit * speed / v0))?;
         }
     }
-    set(
+    set_override(
         &mut v,
         &format!("bodies.0.motion.velocity=[0.0,{}]", -speed),
     )?;
-    set(&mut v, &format!("bodies.0.angle={angle}"))?;
-    set(&mut v, &format!("particle_spacing={l0}"))?;
-    let case = parse(v.clone())?;
+    set_override(&mut v, &format!("bodies.0.angle={angle}"))?;
+    set_override(&mut v, &format!("particle_spacing={l0}"))?;
+    let case = parse_case(v.clone())?;
     let body = case
         .bodies
         .first()
@@ -244,13 +185,13 @@ pub fn wedge_case(base: &Value, speed: Real, angle: Real, l0: Real) -> io::Resul
     let (contact, t_chine) =
         chine_time(&body.polygon, body.position, body.angle, *velocity, surface)
             .ok_or_else(|| io::Error::other("no chine time"))?;
-    set(&mut v, &format!("time.end={}", contact + t_chine))?;
+    set_override(&mut v, &format!("time.end={}", contact + t_chine))?;
     // loads at 50 rows over the run, no snapshots
-    set(
+    set_override(
         &mut v,
         &format!("output.load_interval={}", (contact + t_chine) / 50.0),
     )?;
-    set(&mut v, "output.snapshot_interval=null")?;
+    set_override(&mut v, "output.snapshot_interval=null")?;
     Ok(v)
 }
 
@@ -258,23 +199,18 @@ pub fn wedge_case(base: &Value, speed: Real, angle: Real, l0: Real) -> io::Resul
 pub fn stress_runs(quick: bool) -> io::Result<Vec<StressRun>> {
     let mut runs = Vec::new();
     // dam break to 5 s
-    let dam_path = cases_dir().join("dam_break.json");
-    let mut dam = if dam_path.exists() {
-        super::read_case_value(&dam_path)?
-    } else {
-        super::dam_break_case(super::reference::KOSHIZUKA_OKA_COLUMN_WIDTH)
-    };
-    let a = super::reference::KOSHIZUKA_OKA_COLUMN_WIDTH;
+    let mut dam = dam_break_value()?;
+    let a = KOSHIZUKA_OKA_COLUMN_WIDTH;
     let dam_end = if quick { 2.0 } else { 5.0 };
     let per_width = if quick { 10 } else { 40 };
-    set(
+    set_override(
         &mut dam,
         &format!("particle_spacing={}", a / per_width as Real),
     )?;
-    set(&mut dam, &format!("time.end={dam_end}"))?;
-    set(&mut dam, &format!("time.cfl={DAM_BREAK_LONG_CFL}"))?;
-    set(&mut dam, "output.load_interval=0.01")?;
-    set(&mut dam, "output.snapshot_interval=null")?;
+    set_override(&mut dam, &format!("time.end={dam_end}"))?;
+    set_override(&mut dam, &format!("time.cfl={DAM_BREAK_LONG_CFL}"))?;
+    set_override(&mut dam, "output.load_interval=0.01")?;
+    set_override(&mut dam, "output.snapshot_interval=null")?;
     runs.push(StressRun {
         name: "dam_break_long".into(),
         description: format!(
@@ -286,7 +222,7 @@ pub fn stress_runs(quick: bool) -> io::Result<Vec<StressRun>> {
     // wedges
     let wedge_path = cases_dir().join("wedge_30deg_constant_velocity.json");
     if wedge_path.exists() {
-        let base = super::read_case_value(&wedge_path)?;
+        let base = read_case_value(&wedge_path)?;
         let l0 = if quick { 0.02 } else { 0.01 };
         for speed in [20.0, 30.0] {
             runs.push(StressRun {
@@ -299,7 +235,7 @@ pub fn stress_runs(quick: bool) -> io::Result<Vec<StressRun>> {
                 kind: StressKind::Plain,
             });
         }
-        let base_speed = parse(base.clone())?
+        let base_speed = parse_case(base.clone())?
             .bodies
             .first()
             .and_then(|b| match &b.motion {
@@ -322,10 +258,10 @@ pub fn stress_runs(quick: bool) -> io::Result<Vec<StressRun>> {
     // still tanks
     let tank_path = cases_dir().join("hydrostatic.json");
     if tank_path.exists() {
-        let base = super::read_case_value(&tank_path)?;
+        let base = read_case_value(&tank_path)?;
         let mut perturbed = base.clone();
         let end = if quick { 0.5 } else { 2.0 };
-        set(&mut perturbed, &format!("time.end={end}"))?;
+        set_override(&mut perturbed, &format!("time.end={end}"))?;
         runs.push(StressRun {
             name: "perturbed_lattice".into(),
             description: format!(
@@ -339,8 +275,8 @@ pub fn stress_runs(quick: bool) -> io::Result<Vec<StressRun>> {
         });
         let mut long = base;
         let end = if quick { 2.0 } else { 20.0 };
-        set(&mut long, &format!("time.end={end}"))?;
-        set(&mut long, "output.snapshot_interval=null")?;
+        set_override(&mut long, &format!("time.end={end}"))?;
+        set_override(&mut long, "output.snapshot_interval=null")?;
         runs.push(StressRun {
             name: "hydrostatic_long".into(),
             description: format!("hydrostatic tank to {end} s"),
@@ -380,7 +316,7 @@ pub fn run_stress(run: &StressRun, dir: &Path) -> StressOutcome {
         load_error_early: Real::NAN,
         load_error_late: Real::NAN,
     };
-    let case = match parse(run.case.clone()) {
+    let case = match parse_case(run.case.clone()) {
         Ok(c) => c,
         Err(e) => {
             out.reason = format!("case rejected: {e}");
@@ -389,7 +325,7 @@ pub fn run_stress(run: &StressRun, dir: &Path) -> StressOutcome {
     };
     out.end_time = case.time.end;
     let started = Instant::now();
-    let outcome = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| match &run.kind {
+    let outcome = catch_panic(|| match &run.kind {
         StressKind::Plain | StressKind::StillTank => {
             let case = case::ValidCase::new(case.clone(), &case::Limits::default())
                 .map_err(|e| format!("invalid case: {e}"))?;
@@ -430,7 +366,7 @@ pub fn run_stress(run: &StressRun, dir: &Path) -> StressOutcome {
         StressKind::PerturbedTank { amplitude, seed } => {
             Ok(perturbed_tank(&case, *amplitude, *seed, out.clone()))
         }
-    }));
+    });
     match outcome {
         Ok(Ok(mut o)) => {
             if !o.wall_time_s.is_finite() {
@@ -443,13 +379,8 @@ pub fn run_stress(run: &StressRun, dir: &Path) -> StressOutcome {
             out.wall_time_s = started.elapsed().as_secs_f64();
             out
         }
-        Err(p) => {
-            let what = p
-                .downcast_ref::<String>()
-                .cloned()
-                .or_else(|| p.downcast_ref::<&str>().map(|s| s.to_string()))
-                .unwrap_or_default();
-            out.reason = format!("panicked: {what}");
+        Err(panic) => {
+            out.reason = format!("panicked: {panic}");
             out.wall_time_s = started.elapsed().as_secs_f64();
             out
         }
@@ -524,6 +455,78 @@ fn perturbed_tank(
     out
 }
 
+// ---------------------------------------------------------------- the CFL sweep
+
+/// One row of the CFL sweep.
+#[derive(Debug, Clone)]
+pub struct CflRow {
+    pub variant: String,
+    pub cfl: Real,
+    pub completed: bool,
+    pub error: Real,
+    pub note: String,
+}
+
+/// For each variant, the dam break at the coarsest spacing with CFL 0.1, 0.2, 0.4, 0.8:
+/// which complete (with a measurable front).
+pub fn cfl_sweep(cases: &[BenchCase], variants: &[Variant], dir: &Path) -> Vec<CflRow> {
+    let mut rows = Vec::new();
+    let Some(dam) = cases
+        .iter()
+        .find(|c| matches!(c.measure, Measure::DamBreak))
+    else {
+        return rows;
+    };
+    let spacing = dam.spacings[0];
+    for variant in variants {
+        for cfl in [0.1, 0.2, 0.4, 0.8] {
+            let mut case = BenchCase {
+                name: dam.name,
+                base: dam.base.clone(),
+                spacings: vec![spacing],
+                overrides: dam.overrides.clone(),
+                measure: Measure::DamBreak,
+            };
+            case.overrides.push(format!("time.cfl={cfl}"));
+            case.overrides.push("time.max_dt=0.01".into());
+            let r = run_one(&case, variant, spacing, &dir.join(format!("cfl_{cfl}")));
+            eprintln!(
+                "stress dam_break {:<14} cfl {cfl:<4} {} error {:.3e} {}",
+                variant.name, r.status, r.error, r.note
+            );
+            rows.push(CflRow {
+                variant: variant.name.into(),
+                cfl,
+                completed: r.status == "succeeded" && r.error.is_finite(),
+                error: r.error,
+                note: r.note,
+            });
+        }
+    }
+    rows
+}
+
+/// The CFL sweep as a markdown table (error study report and stress report).
+pub fn cfl_sweep_table(md: &mut String, rows: &[CflRow]) {
+    let _ = writeln!(
+        md,
+        "| variant | CFL | completed | error | note |\n| --- | ---: | --- | ---: | --- |"
+    );
+    for s in rows {
+        let _ = writeln!(
+            md,
+            "| {} | {} | {} | {} | {} |",
+            s.variant,
+            s.cfl,
+            s.completed,
+            md_percent(s.error),
+            md_text(&s.note)
+        );
+    }
+}
+
+// ---------------------------------------------------------------- the tables
+
 /// The table of stress outcomes (markdown, with a header line).
 pub fn stress_table(rows: &[StressOutcome]) -> String {
     let mut md = String::from(
@@ -546,20 +549,16 @@ pub fn stress_table(rows: &[StressOutcome]) -> String {
             } else {
                 "—".into()
             },
-            super::report::fmt_err(r.load_error_early),
-            super::report::fmt_err(r.load_error_late),
-            r.reason.replace('|', "/")
+            md_percent(r.load_error_early),
+            md_percent(r.load_error_late),
+            md_text(&r.reason)
         );
     }
     md
 }
 
 /// `stress.md`: the scenes, the table, the CFL sweep table when given.
-pub fn stress_markdown(
-    rows: &[StressOutcome],
-    cfl: &[super::report::StressRow],
-    quick: bool,
-) -> String {
+pub fn stress_markdown(rows: &[StressOutcome], cfl: &[CflRow], quick: bool) -> String {
     let mut md = String::from("# mpsfsi stress runs\n\n");
     let _ = writeln!(
         md,
@@ -591,7 +590,7 @@ pub fn stress_markdown(
     );
     if !cfl.is_empty() {
         let _ = writeln!(md, "\n## CFL sweep of the dam break\n");
-        super::report::cfl_sweep_table(&mut md, cfl);
+        cfl_sweep_table(&mut md, cfl);
     }
     md
 }
@@ -610,8 +609,8 @@ pub fn run_all(quick: bool, dir: &Path) -> io::Result<Vec<StressOutcome>> {
             o.steps,
             o.wall_time_s,
             o.max_speed,
-            super::report::fmt_err(o.load_error_early),
-            super::report::fmt_err(o.load_error_late),
+            md_percent(o.load_error_early),
+            md_percent(o.load_error_late),
             o.reason
         );
         rows.push(o);

@@ -4,12 +4,12 @@
 //! enums that carry their own data, so a stage matches on a variant and finds what it
 //! needs inside it.
 
-use crate::math::{vec2, Real, Vec2};
 use super::params::MpsParameters;
 use crate::case::{
     self, Case, GradientKind, KernelKind, LaplacianKind, Scheme, SolverKind, ViscosityKind,
     WallKinematics, WallLoadKind,
 };
+use crate::math::{vec2, Real, Vec2};
 
 /// Source term of the pressure Poisson equation.
 #[derive(Debug, Clone, Copy, PartialEq)]

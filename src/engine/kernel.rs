@@ -4,8 +4,8 @@
 //!
 //! Notation: q = r / r_e.
 
-use crate::math::Real;
 use crate::case::KernelKind;
+use crate::math::Real;
 
 /// A weight function and its first two radial derivatives.
 pub trait Kernel: Copy + Send + Sync + 'static {

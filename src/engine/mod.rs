@@ -14,6 +14,4 @@ pub mod step;
 pub mod walls;
 mod workspace;
 
-// the scalar and vector types live below both case and engine; `engine::math` stays a path
-pub use crate::math;
 pub use simulation::{SimError, Simulation, StageTimes, StepInfo, WallLoad};

@@ -10,9 +10,9 @@
 //! With the 1/n0 prefactor of paper 004 eqs. 3 and 9 the HL Laplacian of |x|² is 8.5
 //! instead of 4 at r_e = 2.1 l0 (Koshizuka kernel), which scales pressures down.
 
-use crate::math::Real;
 use super::operators::LatticeConstants;
 use crate::case::{Case, LaplacianKind, Scheme};
+use crate::math::Real;
 use crate::with_kernel;
 
 pub const DIM: Real = 2.0;

@@ -2,12 +2,12 @@
 //! the fluid blocks, outside every solid and at least [`SURFACE_CLEARANCE`] from every
 //! wall and body surface, and the wall objects with their solid regions.
 
-use crate::math::{cross, rotate, vec2, Real, Vec2};
 use super::params::MpsParameters;
 use super::particles::Particles;
-use crate::geometry::{centroid, closest_on_segment, inside, WallShape};
 use super::walls::{WallObject, WallState};
 use crate::case::{Case, FluidSide, Motion};
+use crate::geometry::{centroid, closest_on_segment, inside, WallShape};
+use crate::math::{cross, rotate, vec2, Real, Vec2};
 use std::collections::HashSet;
 
 /// Least distance, in spacings, from a lattice point kept as a fluid particle to a wall

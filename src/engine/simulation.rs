@@ -2,13 +2,13 @@
 //! server runs many of these side by side.
 
 use super::config::Config;
-use crate::math::{vec2, Real, Vec2};
 use super::params::MpsParameters;
 use super::particles::Particles;
 use super::scene::{build_scene, Scene};
 use super::walls::WallObject;
 use super::workspace::Workspace;
 use crate::case::Case;
+use crate::math::{vec2, Real, Vec2};
 
 /// Why a run stopped early.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]

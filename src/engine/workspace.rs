@@ -1,9 +1,9 @@
 //! Buffers the step reuses from one step to the next (no allocation at a steady size).
 
-use crate::math::{Real, Vec2};
 use super::neighbors::NeighborList;
 use super::pressure::{CsrMatrix, SolverCache};
 use super::walls::WallContacts;
+use crate::math::{Real, Vec2};
 
 /// What the step derives from the state and keeps for the next step, and its buffers.
 #[derive(Debug, Default)]

@@ -3,7 +3,7 @@
 //! 1993). Plain Wagner (23.26) is an upper bound, von Karman (9.42) a lower bound.
 
 use crate::common::*;
-use mpsfsi::bench::measure::{fit_force_coefficient, force_coefficient_from_contact};
+use mpsfsi::analysis::measure::{fit_force_coefficient, force_coefficient_from_contact};
 use mpsfsi::coupling::CouplingOptions;
 use mpsfsi::engine::Simulation;
 use mpsfsi::math::Vec2;
@@ -53,7 +53,7 @@ pub fn wedge_fit(overrides: &[String]) -> WedgeFit {
     assert!(trace.error.is_none(), "{:?}", trace.error);
     let k = trace.wall("wedge");
     let scale = RHO * V.powi(3);
-    // the same estimators as the benchmark (bench::measure): each step's load is the mean
+    // the same estimators as the benchmark (analysis::measure): each step's load is the mean
     // over the step, sampled at its midpoint; origin at the keel contact, t = 0 (the
     // apex starts on the undisturbed surface)
     let times: Vec<f64> = trace.steps.iter().map(|s| s.time).collect();

@@ -1,10 +1,10 @@
-use mpsfsi::bench::measure::{
+use mpsfsi::analysis::measure::{
     exponential_decay_rate, fit_force_coefficient, force_coefficient_from_contact, interpolate,
     interval_mean_after, oscillation_peaks, surge_front, surge_front_rms_error,
 };
-use mpsfsi::bench::reference::MARTIN_MOYCE_SURGE;
-use mpsfsi::bench::report::{pareto_front, time_to_reach};
-use mpsfsi::bench::BenchResult;
+use mpsfsi::analysis::reference::MARTIN_MOYCE_SURGE;
+use mpsfsi::bench::error_report::{pareto_front, time_to_reach};
+use mpsfsi::bench::error_study::BenchResult;
 
 #[test]
 fn a_front_equal_to_martin_and_moyce_has_zero_error_and_a_10_percent_one_has_10() {
@@ -144,17 +144,17 @@ fn the_pareto_front_keeps_only_undominated_runs() {
 
 #[test]
 fn a_coarse_dam_break_runs_and_is_scored_against_martin_and_moyce() {
-    let cases = mpsfsi::bench::bench_cases(true).unwrap();
+    let cases = mpsfsi::bench::error_study::bench_cases(true).unwrap();
     let dam = cases
         .iter()
         .find(|c| c.name == "dam_break")
         .expect("the dam break is always benchmarked");
-    let variant = mpsfsi::bench::variants()
+    let variant = mpsfsi::bench::error_study::variants()
         .into_iter()
         .find(|v| v.name == "default")
         .unwrap();
     let dir = crate::scratch_dir("bench-dam-break");
-    let r = mpsfsi::bench::run_one(dam, &variant, dam.spacings[0], &dir);
+    let r = mpsfsi::bench::error_study::run_one(dam, &variant, dam.spacings[0], &dir);
     // a run that fails after covering T = 3 is still scored (status says it failed)
     assert!(r.error.is_finite() && r.error >= 0.0, "{r:?}");
     // a collapsing column is far from a still one: a front stuck at Z = 1 would have an
@@ -197,7 +197,7 @@ fn the_interpretation_is_computed_from_the_rows() {
         }
     }
     let refs: Vec<&BenchResult> = rows.iter().collect();
-    let text = mpsfsi::bench::report::interpretation(&refs);
+    let text = mpsfsi::bench::error_report::interpretation(&refs);
     assert!(text.contains("`fast`: error 20.00% at l0 = 0.0400 to 5.00% at l0 = 0.0100 (decreasing with refinement; observed order 1.00)"), "{text}");
     assert!(text.contains("`copy` gives the errors of `fast`"), "{text}");
     assert!(!text.contains("`better` gives the errors"), "{text}");
@@ -240,10 +240,11 @@ fn bench_refuses_an_unknown_variant_or_case() {
 #[test]
 #[ignore]
 fn cfl_sweep_reports_every_variant() {
-    let cases = mpsfsi::bench::bench_cases(true).unwrap();
+    let cases = mpsfsi::bench::error_study::bench_cases(true).unwrap();
     let dir = crate::scratch_dir("cfl-sweep");
-    let rows = mpsfsi::bench::report::cfl_sweep(&cases, &mpsfsi::bench::variants(), &dir);
-    for v in mpsfsi::bench::variants() {
+    let rows =
+        mpsfsi::bench::stress::cfl_sweep(&cases, &mpsfsi::bench::error_study::variants(), &dir);
+    for v in mpsfsi::bench::error_study::variants() {
         let mine: Vec<_> = rows.iter().filter(|r| r.variant == v.name).collect();
         assert_eq!(mine.len(), 4, "{}", v.name);
         for r in mine {
@@ -279,7 +280,7 @@ fn wedge_case() -> mpsfsi::case::Case {
 
 #[test]
 fn the_wedge_score_is_zero_for_the_similarity_force_and_measures_a_wrong_one() {
-    use mpsfsi::bench::{score, Measure, RunOutcome};
+    use mpsfsi::bench::score::{score, Measure, RunOutcome};
     let case = wedge_case();
     let (rho, v): (f64, f64) = (1000.0, 6.15);
     // the keel starts 2 cm above the water: contact at 0.02 / V
@@ -306,7 +307,8 @@ fn the_wedge_score_is_zero_for_the_similarity_force_and_measures_a_wrong_one() {
             ));
         }
         std::fs::write(dir.join("loads.csv"), text).unwrap();
-        let (error, _, _, _, note) = score(&Measure::Wedge, &case, &dir, &outcome).unwrap();
+        let s = score(&Measure::Wedge, &case, &dir, &outcome).unwrap();
+        let (error, note) = (s.error, s.note);
         assert!(
             (error - expected_error).abs() < 1e-6,
             "C = {c}: error {error} ({note})"
@@ -316,7 +318,7 @@ fn the_wedge_score_is_zero_for_the_similarity_force_and_measures_a_wrong_one() {
 
 #[test]
 fn the_hydrostatic_score_compares_the_tank_load_with_the_water_weight() {
-    use mpsfsi::bench::{score, Measure, RunOutcome};
+    use mpsfsi::bench::score::{score, Measure, RunOutcome};
     let case = mpsfsi::case::parse_case_value(serde_json::json!({
         "name": "tank",
         "fluid": { "density": 1000.0, "gravity": [0.0, -9.81] },
@@ -356,8 +358,8 @@ fn the_hydrostatic_score_compares_the_tank_load_with_the_water_weight() {
         simulated_time: 1.0,
         particles,
     };
-    let (load_error, _, probe_error, _, _) =
-        score(&Measure::Hydrostatic, &case, &dir, &outcome).unwrap();
+    let s = score(&Measure::Hydrostatic, &case, &dir, &outcome).unwrap();
+    let (load_error, probe_error) = (s.error, s.error2);
     assert!((load_error - 0.02).abs() < 1e-9, "{load_error}");
     assert!((probe_error - 0.01).abs() < 1e-9, "{probe_error}");
     let failed = RunOutcome {
@@ -367,7 +369,7 @@ fn the_hydrostatic_score_compares_the_tank_load_with_the_water_weight() {
     assert!(
         score(&Measure::Hydrostatic, &case, &dir, &failed)
             .unwrap()
-            .0
+            .error
             .is_nan(),
         "a failed tank is not scored"
     );
@@ -397,7 +399,7 @@ fn peaks_of_a_sampled_decaying_oscillation_give_its_rate_and_frequency() {
 
 #[test]
 fn the_exact_viscous_wave_decay_tends_to_lighthills_and_stays_below_it() {
-    use mpsfsi::bench::reference::{exact_energy_decay, lighthill_energy_decay};
+    use mpsfsi::analysis::reference::{exact_energy_decay, lighthill_energy_decay};
     let k = 2.0 * std::f64::consts::PI;
     for (nu, tolerance) in [(1.0e-6, 0.002), (1.0e-4, 0.02)] {
         let ratio = exact_energy_decay(9.81, nu, k).unwrap() / lighthill_energy_decay(nu, k);
@@ -410,7 +412,7 @@ fn the_exact_viscous_wave_decay_tends_to_lighthills_and_stays_below_it() {
 
 #[test]
 fn a_variant_changes_its_own_scheme_fields_and_keeps_the_cases_other_settings() {
-    use mpsfsi::bench::{bench_cases, run_case_value, variants};
+    use mpsfsi::bench::error_study::{bench_cases, run_case_value, variants};
     use mpsfsi::case::{GradientKind, Scheme};
     let cases = bench_cases(true).unwrap();
     let wedge = cases.iter().find(|c| c.name == "wedge_30deg").unwrap();

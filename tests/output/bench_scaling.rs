@@ -1,14 +1,16 @@
 //! The pure measures of `bench --scaling`, `--features` and `--stress`: exponent fit,
 //! `/proc` parsing, tables, perturbation, load drift, chine time. All fast.
 
+use mpsfsi::bench::cases::{tank_case_value, tank_lattice};
+use mpsfsi::bench::features::{feature_rows, FeatureSample};
+use mpsfsi::bench::perturb::perturb_positions;
+use mpsfsi::bench::resources::parse_status_bytes;
 use mpsfsi::bench::scaling::{
-    feature_rows, fit_power_law, median, parse_status_bytes, scaling_csv, scaling_csv_header,
-    scaling_markdown, spread, stage_difference, stage_ms_per_step, step_cost_fit, tank_case_value,
-    tank_lattice, thread_speedup, FeatureSample, ScalingOptions, ScalingPoint,
+    scaling_csv, scaling_csv_header, scaling_markdown, stage_difference, stage_ms_per_step,
+    step_cost_fit, thread_speedup, ScalingOptions, ScalingPoint,
 };
-use mpsfsi::bench::stress::{
-    chine_time, load_drift, perturb_positions, stress_table, window_mean, StressOutcome,
-};
+use mpsfsi::bench::stats::{fit_power_law, median, spread, window_mean};
+use mpsfsi::bench::stress::{chine_time, load_drift, stress_table, StressOutcome};
 use mpsfsi::engine::StageTimes;
 use mpsfsi::math::Vec2;
 
@@ -54,7 +56,7 @@ fn proc_status_fields_are_read_in_bytes() {
     assert_eq!(parse_status_bytes("VmRSS:\tlots kB\n", "VmRSS"), None);
     // this process has them (Linux)
     if std::path::Path::new("/proc/self/status").exists() {
-        let (rss, hwm) = mpsfsi::bench::scaling::memory_now().unwrap();
+        let (rss, hwm) = mpsfsi::bench::resources::memory_now().unwrap();
         assert!(rss > 0 && hwm >= rss);
     }
 }
@@ -246,7 +248,7 @@ fn feature_rows_compare_medians_with_the_noise_of_the_repeats() {
     assert_eq!(rows[2].min_ms, 128.0);
     assert_eq!(rows[2].median_cpu_ms, 260.0);
     assert!(!rows[2].within_noise());
-    let md = mpsfsi::bench::scaling::features_markdown(&rows, 3);
+    let md = mpsfsi::bench::features::features_markdown(&rows, 3);
     assert!(
         md.contains("| probes | 8 probes | 20000 | 101.000 |"),
         "{md}"

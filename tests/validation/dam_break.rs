@@ -28,10 +28,10 @@ use mpsfsi::bench::stress::DAM_BREAK_LONG_CFL;
 use mpsfsi::engine::Simulation;
 
 /// (t sqrt(g/a), H/(2a)) of the residual column, from references.md.
-use mpsfsi::bench::reference::MARTIN_MOYCE_COLUMN;
+use mpsfsi::analysis::reference::MARTIN_MOYCE_COLUMN;
 /// (T, Z) of Martin & Moyce (1952), n² = 2, from references.md (one table for the
 /// benchmark and this test).
-use mpsfsi::bench::reference::MARTIN_MOYCE_SURGE as MARTIN_MOYCE;
+use mpsfsi::analysis::reference::MARTIN_MOYCE_SURGE as MARTIN_MOYCE;
 
 #[test]
 fn surge_front_follows_martin_and_moyce() {

@@ -12,8 +12,8 @@
 //! surface is half the physical one.
 
 use super::shipped_case;
-use mpsfsi::bench::measure::{exponential_decay_rate, oscillation_peaks};
-use mpsfsi::bench::reference::{exact_energy_decay, lighthill_energy_decay, wave_frequency};
+use mpsfsi::analysis::measure::{exponential_decay_rate, oscillation_peaks};
+use mpsfsi::analysis::reference::{exact_energy_decay, lighthill_energy_decay, wave_frequency};
 use mpsfsi::case::{Limits, ValidCase};
 use mpsfsi::run::{run_case, Quiet, RunStatus};
 use std::f64::consts::PI;

@@ -35,8 +35,8 @@ pub use second_derivatives::{
     anisotropic_second_derivatives, second_derivatives, SecondDerivatives,
 };
 
-use crate::math::{Real, Vec2};
 use super::neighbors::NeighborList;
+use crate::math::{Real, Vec2};
 
 /// The particle cloud an operator acts on. The neighbour list may have been built with a
 /// radius larger than `re`: every weight vanishes at and beyond `re`.

@@ -2,9 +2,9 @@
 //! is checked for divergence.
 
 use super::density::neighbor_list;
-use crate::math::Real;
 use crate::engine::simulation::{SimError, Simulation};
 use crate::engine::walls::WallContacts;
+use crate::math::Real;
 use rayon::prelude::*;
 
 pub(super) fn remove_particles_outside_domain(sim: &mut Simulation) -> usize {

@@ -2,7 +2,6 @@
 
 use crate::case::{GradientKind, WallLoadKind};
 use crate::engine::kernel::Kernel;
-use crate::math::{vec2, Real, Vec2};
 use crate::engine::operators::{
     gradient_row, minimum_over_neighbourhood, pressure_gradient, Cloud, Normalisation,
     PressureGradient,
@@ -11,6 +10,7 @@ use crate::engine::params::DIM;
 use crate::engine::simulation::{Simulation, WallLoad};
 use crate::engine::walls::pressure_load::pressure_loads;
 use crate::engine::walls::{moment_about, PlacedWall};
+use crate::math::{vec2, Real, Vec2};
 use rayon::prelude::*;
 
 pub(super) fn correct_velocity_and_position<K: Kernel>(

@@ -4,12 +4,12 @@
 
 use crate::case::WallKinematics;
 use crate::engine::kernel::Kernel;
-use crate::math::{Real, Vec2};
 use crate::engine::neighbors::NeighborList;
 use crate::engine::operators::{self, hs_divergence, Cloud};
 use crate::engine::params::MpsParameters;
 use crate::engine::simulation::Simulation;
 use crate::engine::walls::WallContacts;
+use crate::math::{Real, Vec2};
 use rayon::prelude::*;
 
 /// The neighbour list at `x`, out to the larger of the two radii.

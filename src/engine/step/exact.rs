@@ -23,11 +23,11 @@
 //! at 1 cm) each apply the gradient, the divergence and an AMG cycle.
 
 use crate::engine::kernel::Kernel;
-use crate::math::{Mat2, Real, Vec2};
 use crate::engine::operators::corrected_gradient_matrix;
 use crate::engine::params::DIM;
 use crate::engine::pressure::{self, SolveParams};
 use crate::engine::simulation::{SimError, Simulation};
+use crate::math::{Mat2, Real, Vec2};
 use rayon::prelude::*;
 
 /// GMRES stops at this residual relative to the pressure equation's right-hand side:

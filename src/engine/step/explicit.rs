@@ -4,9 +4,9 @@
 use super::walls::KernelWeights;
 use crate::case::ViscosityKind;
 use crate::engine::kernel::Kernel;
-use crate::math::{vec2, Real, Vec2};
 use crate::engine::params::DIM;
 use crate::engine::simulation::{Simulation, WallLoad};
+use crate::math::{vec2, Real, Vec2};
 use rayon::prelude::*;
 
 /// Gravity and (when nu > 0) viscosity with no-slip (or free-slip) walls.

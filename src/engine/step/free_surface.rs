@@ -1,8 +1,8 @@
 //! Free-surface detection and the Dirichlet value of surface particles.
 
 use crate::engine::kernel::Kernel;
-use crate::math::{vec2, Real, Vec2};
 use crate::engine::simulation::Simulation;
+use crate::math::{vec2, Real, Vec2};
 use rayon::prelude::*;
 
 /// Free surface: n* < beta n0, confirmed by a one-sided neighbourhood

@@ -34,10 +34,10 @@ mod walls;
 
 use super::config::Projection;
 use super::kernel::Kernel;
-use crate::math::Real;
 use super::simulation::{SimError, Simulation, StageTimes, StepInfo, WallLoad};
 use super::walls::WallContacts;
 use crate::case::WallLoadKind;
+use crate::math::Real;
 use crate::with_kernel;
 use std::time::Instant;
 use walls::{placed_walls, wall_kernels, KernelWeights};

@@ -6,11 +6,11 @@ use super::walls::KernelWeights;
 use crate::case::{LaplacianKind, WallKinematics};
 use crate::engine::config::{Projection, Source};
 use crate::engine::kernel::Kernel;
-use crate::math::{vec2, Real, Vec2};
 use crate::engine::operators::{for_each_lattice_coefficient, laplacian_row, Cloud, Normalisation};
 use crate::engine::pressure::{self, SolveParams};
 use crate::engine::simulation::{SimError, Simulation};
 use crate::engine::walls::WallContact;
+use crate::math::{vec2, Real, Vec2};
 use rayon::prelude::*;
 
 /// The extrapolation gradient c = rho (g - a_w) of every wall contact (module docs);

@@ -3,9 +3,9 @@
 
 use crate::engine::config::SpacingControl;
 use crate::engine::kernel::Kernel;
-use crate::math::{Real, Vec2};
 use crate::engine::simulation::{Simulation, WallLoad};
 use crate::engine::walls::{moment_about, PlacedWall};
+use crate::math::{Real, Vec2};
 use rayon::prelude::*;
 
 /// Safety net: pairwise collision below `collision_distance` l0 and an inelastic

@@ -3,9 +3,9 @@
 
 use crate::case::LaplacianKind;
 use crate::engine::kernel::Kernel;
-use crate::math::Real;
 use crate::engine::simulation::Simulation;
 use crate::engine::walls::{PlacedWall, WallKernels, WallWeights};
+use crate::math::Real;
 use std::marker::PhantomData;
 
 pub(super) struct KernelWeights<K> {

@@ -16,9 +16,9 @@
 
 pub mod pressure_load;
 
+use crate::engine::operators::VirtualPoints;
 use crate::geometry::{closest_on_segment, inside, signed_distance, WallShape};
 use crate::math::{cross, perp, Mat2, Real, Vec2};
-use crate::engine::operators::VirtualPoints;
 use rayon::prelude::*;
 
 /// Rigid motion state of a wall object (fixed walls: all zero).

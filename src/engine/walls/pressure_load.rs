@@ -17,10 +17,10 @@
 //! values are clipped (the fluid cannot pull on a wall). Only particles on the fluid
 //! side of a segment count.
 
-use crate::geometry::inside;
 use super::{moment_about, PlacedWall};
-use crate::math::{perp, Real, Vec2};
 use crate::engine::neighbors::CellGrid;
+use crate::geometry::inside;
+use crate::math::{perp, Real, Vec2};
 use rayon::prelude::*;
 
 /// Sample points per particle spacing along the surface.

@@ -1,9 +1,11 @@
-//! The benchmark's outputs: `results.csv`, `report.md` (tables and an interpretation
-//! computed from the results), one SVG per case (error against wall time), and the
-//! CFL sweep of `--stress`.
+//! The error study's outputs: `results.csv`, `report.md` (tables and an interpretation
+//! computed from the results, with the CFL sweep and the stress runs of `--stress`
+//! when they ran), one SVG per case (error against wall time).
 
-use super::{run_one, variants, BenchCase, BenchResult, Measure, Variant};
-use crate::engine::math::Real;
+use super::error_study::{variants, BenchCase, BenchResult};
+use super::stress::{cfl_sweep_table, stress_table, CflRow, StressOutcome};
+use super::table::{csv_field, md_percent, md_text};
+use crate::math::Real;
 use crate::output::plot::{log_log_svg, Series};
 use std::fmt::Write as _;
 use std::io;
@@ -11,14 +13,6 @@ use std::path::Path;
 
 pub const RESULTS_HEADER: &str =
     "case,variant,spacing,particles,steps,wall_time_s,error,error_measure,error2,error2_measure,mean_solver_iterations,status,note";
-
-fn csv_field(s: &str) -> String {
-    if s.contains([',', '"', '\n']) {
-        format!("\"{}\"", s.replace('"', "\"\""))
-    } else {
-        s.to_string()
-    }
-}
 
 /// Write `results.csv` (rewritten after every run, so a long benchmark can be read while it runs).
 pub fn write_results_csv(path: &Path, results: &[BenchResult]) -> io::Result<()> {
@@ -74,89 +68,13 @@ pub fn time_to_reach<'a>(results: &[&'a BenchResult], threshold: Real) -> Option
         .min_by(|a, b| a.wall_time_s.total_cmp(&b.wall_time_s))
 }
 
-/// The CFL sweep as a markdown table (report and stress report).
-pub(super) fn cfl_sweep_table(md: &mut String, rows: &[StressRow]) {
-    let _ = writeln!(
-        md,
-        "| variant | CFL | completed | error | note |\n| --- | ---: | --- | ---: | --- |"
-    );
-    for s in rows {
-        let _ = writeln!(
-            md,
-            "| {} | {} | {} | {} | {} |",
-            s.variant,
-            s.cfl,
-            s.completed,
-            fmt_err(s.error),
-            s.note.replace('|', "/")
-        );
-    }
-}
-
-pub(super) fn fmt_err(e: Real) -> String {
-    if e.is_finite() {
-        format!("{:.2}%", 100.0 * e)
-    } else {
-        "—".into()
-    }
-}
-
-/// One row of the CFL sweep.
-#[derive(Debug, Clone)]
-pub struct StressRow {
-    pub variant: String,
-    pub cfl: Real,
-    pub completed: bool,
-    pub error: Real,
-    pub note: String,
-}
-
-/// For each variant, the dam break at the coarsest spacing with CFL 0.1, 0.2, 0.4, 0.8:
-/// which complete (with a measurable front).
-pub fn cfl_sweep(cases: &[BenchCase], variants: &[Variant], dir: &Path) -> Vec<StressRow> {
-    let mut rows = Vec::new();
-    let Some(dam) = cases
-        .iter()
-        .find(|c| matches!(c.measure, Measure::DamBreak))
-    else {
-        return rows;
-    };
-    let spacing = dam.spacings[0];
-    for variant in variants {
-        for cfl in [0.1, 0.2, 0.4, 0.8] {
-            let mut case = BenchCase {
-                name: dam.name,
-                base: dam.base.clone(),
-                spacings: vec![spacing],
-                overrides: dam.overrides.clone(),
-                measure: Measure::DamBreak,
-            };
-            case.overrides.push(format!("time.cfl={cfl}"));
-            case.overrides.push("time.max_dt=0.01".into());
-            let r = run_one(&case, variant, spacing, &dir.join(format!("cfl_{cfl}")));
-            eprintln!(
-                "stress dam_break {:<14} cfl {cfl:<4} {} error {:.3e} {}",
-                variant.name, r.status, r.error, r.note
-            );
-            rows.push(StressRow {
-                variant: variant.name.into(),
-                cfl,
-                completed: r.status == "succeeded" && r.error.is_finite(),
-                error: r.error,
-                note: r.note,
-            });
-        }
-    }
-    rows
-}
-
 /// Write `report.md` and the SVGs.
 pub fn write_report(
     out_dir: &Path,
     cases: &[BenchCase],
     results: &[BenchResult],
-    stress: &[StressRow],
-    stress_runs: &[super::stress::StressOutcome],
+    stress: &[CflRow],
+    stress_runs: &[StressOutcome],
     quick: bool,
     total_seconds: f64,
 ) -> io::Result<()> {
@@ -218,14 +136,14 @@ pub fn write_report(
                 r.particles,
                 r.steps,
                 r.wall_time_s,
-                fmt_err(r.error),
+                md_percent(r.error),
                 if measure2.is_some() {
-                    format!("{} | ", fmt_err(r.error2))
+                    format!("{} | ", md_percent(r.error2))
                 } else {
                     String::new()
                 },
                 r.status,
-                r.note.replace('|', "/")
+                md_text(&r.note)
             );
         }
         md.push('\n');
@@ -284,7 +202,7 @@ pub fn write_report(
     }
     if !stress_runs.is_empty() {
         let _ = writeln!(md, "## Stress runs\n");
-        md.push_str(&super::stress::stress_table(stress_runs));
+        md.push_str(&stress_table(stress_runs));
         let _ = writeln!(md, "\nScenes and notes in `stress.md`.\n");
     }
     std::fs::write(out_dir.join("report.md"), md)
@@ -322,9 +240,9 @@ pub fn interpretation(rows: &[&BenchResult]) -> String {
             let _ = writeln!(
                 md,
                 "- `{name}`: error {} at l0 = {:.4} to {} at l0 = {:.4} ({}; observed order {:.2}).",
-                fmt_err(first.error),
+                md_percent(first.error),
                 first.spacing,
-                fmt_err(last.error),
+                md_percent(last.error),
                 last.spacing,
                 trend,
                 order
@@ -373,7 +291,7 @@ pub fn interpretation(rows: &[&BenchResult]) -> String {
                     rows[i].variant,
                     rows[i].spacing,
                     rows[i].wall_time_s,
-                    fmt_err(rows[i].error)
+                    md_percent(rows[i].error)
                 )
             })
             .collect();
@@ -401,13 +319,4 @@ pub fn interpretation(rows: &[&BenchResult]) -> String {
         }
     }
     md
-}
-
-/// `--operators`: the operator convergence study of [`super::operators`] (paper 000
-/// §5) as `operators.md`.
-pub fn write_operators(out_dir: &Path) -> io::Result<()> {
-    let rows = super::operators::convergence_table();
-    let mut md = String::from("# Operator convergence study (paper 000 §5)\n\n");
-    md.push_str(&super::operators::convergence_markdown(&rows));
-    std::fs::write(out_dir.join("operators.md"), md)
 }

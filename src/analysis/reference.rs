@@ -1,7 +1,7 @@
-//! Published and computed reference answers the benchmark compares with, each with its
-//! source (all from `../shared/references.md`).
+//! Published and computed reference answers the benchmark and the tests compare with, each
+//! with its source (all from `../shared/references.md`).
 
-use crate::engine::math::Real;
+use crate::math::Real;
 
 /// Martin & Moyce (1952), "An experimental study of the collapse of liquid columns on a
 /// rigid horizontal plane", Phil. Trans. R. Soc. A 244, 312-324: surge front of a

@@ -1,8 +1,8 @@
-//! The error measures of the benchmark, as pure functions of the run's outputs so that
-//! each can be tested on synthetic data.
+//! The error measures of the benchmark and the validation tests, as pure functions of a
+//! run's outputs so that each can be tested on synthetic data.
 
 use super::reference::{MARTIN_MOYCE_SURGE, SURGE_COMPARISON_RANGE};
-use crate::engine::math::Real;
+use crate::math::Real;
 
 /// Time-weighted mean of a series of interval means (`times[k]` ends the interval of
 /// `values[k]`, the first starting at `start`) over the intervals ending after `from`.

@@ -1,0 +1,7 @@
+//! Estimators and reference answers shared by `mpsfsi bench` and the tests: the pure
+//! functions that turn a run's outputs into an error against a published or analytic
+//! reference. Analysis reads outputs; it runs nothing, so it imports nothing from the
+//! benchmark.
+
+pub mod measure;
+pub mod reference;
