@@ -142,6 +142,18 @@ pub(super) fn assemble_pressure_equation<K: Kernel>(
     });
     let fills = fills.as_deref();
     // row `row` appended to cols/vals; returns the right-hand side
+    // one off-diagonal coefficient c_ij: into the matrix when j is an unknown, else its
+    // Dirichlet value into the right-hand side (returned)
+    let off_diagonal = |j: usize, c: Real, cols: &mut Vec<u32>, vals: &mut Vec<Real>| {
+        let uj = unknown_of[j];
+        if uj != u32::MAX {
+            cols.push(uj);
+            vals.push(-c);
+            0.0
+        } else {
+            c * dirichlet[j]
+        }
+    };
     let row_entries = |row: usize, cols: &mut Vec<u32>, vals: &mut Vec<Real>| -> Real {
         let i = particle_of[row] as usize;
         let mut diag = compress;
@@ -149,13 +161,7 @@ pub(super) fn assemble_pressure_equation<K: Kernel>(
         if operator_rows && contacts.of(i).is_empty() {
             for (j, c) in laplacian_row::<K>(kind, &cloud, lattice, i).off_diagonal {
                 diag += c;
-                let uj = unknown_of[j];
-                if uj != u32::MAX {
-                    cols.push(uj);
-                    vals.push(-c);
-                } else {
-                    b += c * dirichlet[j];
-                }
+                b += off_diagonal(j, c, cols, vals);
             }
             cols.push(row as u32);
             vals.push(diag);
@@ -171,13 +177,7 @@ pub(super) fn assemble_pressure_equation<K: Kernel>(
         for_each_lattice_coefficient::<K>(classic, &cloud, c_lap, i, pair_scale, |j, r, l| {
             first_moment += r * l;
             diag += l;
-            let uj = unknown_of[j];
-            if uj != u32::MAX {
-                cols.push(uj);
-                vals.push(-l);
-            } else {
-                b += l * dirichlet[j];
-            }
+            b += off_diagonal(j, l, cols, vals);
         });
         cols.push(row as u32);
         vals.push(diag);
