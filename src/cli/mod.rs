@@ -30,7 +30,7 @@ pub struct Cli {
 pub enum Command {
     /// Run a case and write the run directory (loads.csv, bodies.csv, probes.csv, summary.json, snapshots/).
     Run {
-        /// Case file (JSON, DESIGN.md §2.2).
+        /// Case file (JSON; the format is in README.md, its schema in api/case.schema.json).
         case: PathBuf,
         /// Run directory to write (created if missing).
         #[arg(long)]
@@ -51,9 +51,9 @@ pub enum Command {
     },
     /// Print the JSON Schema of the case format (the text of api/case.schema.json).
     Schema,
-    /// Run the HTTP job service (DESIGN.md §2.4).
+    /// Run the HTTP job service (README.md, api/openapi.yaml).
     Serve(mpsfsi::service::Config),
-    /// Run the run-time-versus-error study and write its report (DESIGN.md §5).
+    /// Run the run-time-versus-error study and write its report (docs/performance.md).
     Bench(BenchArgs),
 }
 
