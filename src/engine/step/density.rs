@@ -52,20 +52,21 @@ pub(super) fn compute_number_density<K: Kernel>(sim: &mut Simulation) {
     sim.workspace.scratch.n_star = number_density::<K>(&cloud, &sim.workspace.contacts);
 }
 
-/// The HS divergence of `u` at the positions of `cloud`, with the walls' virtual points
-/// moving with the wall when `scheme.wall_kinematics` is `source`.
+/// The HS divergence of `u` at the positions of `cloud`, plus, when
+/// `scheme.wall_kinematics` is `source`, the walls' share -c ∇Z·(u_i - u_w) taken with
+/// the particle velocities `u_at_walls` (the source uses u^n there, the end of the step u).
 pub(super) fn divergence<K: Kernel>(
     sim: &Simulation,
     cloud: &Cloud,
     u: &[Vec2],
-    u_wall_relative: &[Vec2],
+    u_at_walls: &[Vec2],
 ) -> Vec<Real> {
     let c = sim.config.params.divergence_coefficient;
     let mut div = hs_divergence::<K>(cloud, u, c);
     if sim.config.method.wall_kinematics == WallKinematics::Source {
         sim.workspace
             .contacts
-            .add_divergence(&mut div, u_wall_relative, c);
+            .add_divergence(&mut div, u_at_walls, c);
     }
     div
 }
