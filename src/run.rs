@@ -4,7 +4,7 @@
 
 use crate::case::{self, Case, Scheme, ValidCase};
 use crate::coupling::Coupling;
-use crate::engine::{SimError, Simulation, StageTimes};
+use crate::engine::{Attempt, SimError, Simulation, StageTimes, StepInfo};
 use crate::math::{vec2, Real};
 use crate::output::{probes::ProbePoint, RunWriter};
 use serde::{Deserialize, Serialize};
@@ -77,6 +77,10 @@ pub struct Summary {
     pub min_dt: Real,
     pub max_dt: Real,
     pub mean_solver_iterations: Real,
+    /// Steps the step guard turned down and repeated with a shorter dt (a particle would
+    /// have moved more than 1.5 cfl spacings).
+    #[serde(default)]
+    pub steps_repeated: u64,
     /// Width of the zero-phase moving average of loads_filtered.csv (s).
     pub filter_window_s: Real,
     pub stage_seconds: StageTimes,
@@ -109,6 +113,38 @@ pub fn estimate_steps(case: &Case) -> u64 {
         dt = dt.min(case.time.cfl * case.particle_spacing / u);
     }
     (case.time.end / dt).ceil() as u64
+}
+
+/// One step of at most `dt`, with the bodies' coupling around it: a step the step guard
+/// turns down is repeated with dt scaled so that the farthest particle would move cfl
+/// spacings (at least a tenth of the last try each time, and at most `MAX_RETRIES` times).
+pub fn advance(
+    sim: &mut Simulation,
+    mut coupling: Option<&mut Coupling>,
+    mut dt: Real,
+) -> Result<StepInfo, SimError> {
+    const MAX_RETRIES: usize = 8;
+    let target = sim.config.control.cfl * sim.config.params.l0;
+    for retry in 0..=MAX_RETRIES {
+        if let Some(c) = coupling.as_deref_mut() {
+            c.before_step(sim, dt);
+        }
+        let attempt = if retry == MAX_RETRIES {
+            Attempt::Taken(sim.step(dt)?)
+        } else {
+            sim.try_step(dt)?
+        };
+        match attempt {
+            Attempt::Taken(info) => {
+                if let Some(c) = coupling.as_deref_mut() {
+                    c.after_step(sim, dt);
+                }
+                return Ok(info);
+            }
+            Attempt::Rejected { moved, .. } => dt *= (target / moved).clamp(0.1, 0.9),
+        }
+    }
+    unreachable!("the last try is taken whatever it moves")
 }
 
 /// Build, step to the end time (or failure / cancellation), write the run directory. The
@@ -165,14 +201,9 @@ pub fn run_case(
         if sim.time + dt > end {
             dt = (end - sim.time).max(1e-12);
         }
-        if let Some(c) = &mut coupling {
-            c.before_step(&mut sim, dt);
-        }
-        match sim.step(dt) {
+        match advance(&mut sim, coupling.as_mut(), dt) {
             Ok(info) => {
-                if let Some(c) = &mut coupling {
-                    c.after_step(&mut sim, dt);
-                }
+                let dt = info.dt;
                 min_dt = min_dt.min(dt);
                 max_dt = max_dt.max(dt);
                 max_velocity = max_velocity.max(info.max_speed);
@@ -225,6 +256,7 @@ pub fn run_case(
         max_velocity,
         min_dt: if min_dt.is_finite() { min_dt } else { 0.0 },
         max_dt,
+        steps_repeated: sim.stats.rejected_steps,
         mean_solver_iterations: if sim.steps > 0 {
             sim.stats.total_solver_iterations as Real / sim.steps as Real
         } else {

@@ -268,8 +268,9 @@ pub enum Dof {
 pub struct TimeControl {
     /// Simulated end time (s).
     pub end: f64,
-    /// Courant number: dt <= cfl * l0 / u_max. Impacts need 0.1: at 0.2 a wedge
-    /// entering at 6 m/s throws jet-root particles out at 50-150 m/s (5 mm spacing).
+    /// Courant number: dt <= cfl * l0 / u_max, also with each particle's last
+    /// acceleration, and a step in which a particle would move more than 1.5 cfl
+    /// spacings is repeated shorter (the jet root of an impact; summary `steps_repeated`).
     #[serde(default = "default_cfl")]
     pub cfl: f64,
     /// Upper bound on the time step (s).

@@ -14,4 +14,4 @@ pub mod step;
 pub mod walls;
 mod workspace;
 
-pub use simulation::{SimError, Simulation, StageTimes, StepInfo, WallLoad};
+pub use simulation::{Attempt, SimError, Simulation, StageTimes, StepInfo, WallLoad};

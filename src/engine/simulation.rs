@@ -105,6 +105,18 @@ pub struct StepInfo {
     pub removed: usize,
 }
 
+/// What an attempted step did (`Simulation::try_step`).
+#[derive(Debug, Clone, Copy)]
+pub enum Attempt {
+    Taken(StepInfo),
+    /// A particle would have moved `moved` (m) in the step of `dt`, beyond the step
+    /// guard; nothing changed.
+    Rejected {
+        dt: Real,
+        moved: Real,
+    },
+}
+
 /// Counts and timings of the run so far.
 #[derive(Debug, Clone, Default)]
 pub struct RunStatistics {
@@ -116,6 +128,8 @@ pub struct RunStatistics {
     pub first_runaway: Option<String>,
     pub stage_times: StageTimes,
     pub total_solver_iterations: u64,
+    /// Attempted steps the step guard turned down (each repeated with a shorter dt).
+    pub rejected_steps: u64,
 }
 
 /// One simulation: its configuration (fixed for the run), its state (particles, walls,
@@ -131,6 +145,9 @@ pub struct Simulation {
     /// Loads of the last step, one per wall object.
     pub loads: Vec<WallLoad>,
     pub stats: RunStatistics,
+    /// The Courant limit of the next step with the last step's accelerations
+    /// (bookkeeping::acceleration_limited_dt); infinite before the first step.
+    pub(crate) acceleration_dt: Real,
     pub(crate) workspace: Workspace,
 }
 
@@ -168,6 +185,7 @@ impl Simulation {
             steps: 0,
             loads: vec![WallLoad::default(); n_walls],
             stats: RunStatistics::default(),
+            acceleration_dt: Real::INFINITY,
             workspace: Workspace::default(),
         };
         sim.initialize();
@@ -205,7 +223,8 @@ impl Simulation {
             .fold(0.0, Real::max)
     }
 
-    /// The next time step: dt = min(cfl l0 / u_max, viscous limit, max_dt).
+    /// The next time step: dt = min(cfl l0 / u_max, the same with the last step's
+    /// accelerations, viscous limit, max_dt).
     pub fn next_dt(&self) -> Real {
         let mut u = self.max_particle_speed();
         for w in &self.walls {
@@ -216,6 +235,7 @@ impl Simulation {
         if u > 0.0 {
             dt = dt.min(self.config.control.cfl * l0 / u);
         }
+        dt = dt.min(self.acceleration_dt);
         if self.config.params.viscosity > 0.0 {
             // explicit diffusion: the strain-rate form's largest eigenvalue is (d + 2)/d
             // times the Laplacian's (it weights r̂ r̂ by d + 2 where the Laplacian has 1)

@@ -69,22 +69,6 @@ fn prescribed_velocity_table_is_integrated_exactly() {
 }
 
 /// Rows `time,name,values...` of a run's CSV file for one name.
-fn csv_rows(path: &std::path::Path, name: &str) -> Vec<Vec<f64>> {
-    let text = std::fs::read_to_string(path).unwrap_or_else(|e| panic!("{}: {e}", path.display()));
-    text.lines()
-        .skip(1)
-        .filter_map(|l| {
-            let mut f = l.split(',');
-            let t: f64 = f.next()?.parse().ok()?;
-            (f.next()? == name).then(|| {
-                std::iter::once(t)
-                    .chain(f.map(|v| v.parse::<f64>().unwrap()))
-                    .collect()
-            })
-        })
-        .collect()
-}
-
 /// The shipped free-fall wedge run once at 1 cm through `run_case`, shared by the tests
 /// that read its run directory: loads.csv and bodies.csv rows for the wedge.
 struct FreeFallRun {
@@ -199,45 +183,19 @@ fn free_fall_wedge_velocity_matches_its_own_loads() {
     );
 }
 
-/// The free-fall wedge loses speed as the momentum balance of the similarity solution
-/// says. Wagner's model writes the entry force as F = d(m_a V)/dt with an added mass
-/// that depends on the penetration h only; calibrated to the similarity solution
-/// (references.md), m_a(h) = C_F rho h² / 2, so that F = C_F rho V³ t at constant speed.
-/// With M dV/dt = M g - F (downward positive) the body's momentum obeys
-/// (M + m_a(h)) V = M (V0 + g t), dh/dt = V: a reference for the velocity loss
-/// V0 - V(t) that the run does not feed on. Compared at every sample while the jet root
-/// is below the chines (0.6-0.9 t_chine): the mean within 10 %, each sample within 20 %
-/// (the force comes in bursts as the wedge meets each lattice row). The model takes the
-/// acceleration part of the force (m_a dV/dt, about 12 % of it at 0.8 t_chine) from the
-/// same added mass, which is Wagner's assumption, not the similarity solution's, and
-/// the 1 cm run's C_F itself carries several per cent.
-/// At CFL 0.1, every sample of 0.6-0.9 t_chine, mean and worst: at 1 cm with the wedge
-/// 0 / 1.1 (shipped) / 2.5 / 4 mm off the axis +6.5 / +0.6 / +2.0 / +4.0 % and
-/// +15.9 / +5.1 / +7.0 / +10.6 %. The case sets CFL 0.1 because at 0.2 a jet-root
-/// particle thrown out at 50-150 m/s takes the water off the face for several
-/// milliseconds (-37.2 % and -48.5 % at 5 mm).
+/// The free-fall wedge at 1 cm loses speed as the momentum balance of the similarity
+/// solution says (`momentum_model_errors`): over 0.6-0.9 t_chine the mean within 10 %,
+/// each sample within 20 % (the force comes in bursts as the wedge meets each lattice
+/// row; B/l0 = 50). The model takes the acceleration part of the force (m_a dV/dt, about
+/// 12 % of it at 0.8 t_chine) from the same added mass, which is Wagner's assumption,
+/// not the similarity solution's. At B/l0 = 100 with 5 % on the mean: tests/bodies
+/// impact.rs.
 #[test]
 fn free_fall_wedge_slows_like_the_momentum_model() {
     let FreeFallRun {
         case, mass, bodies, ..
     } = free_fall_run();
-    let (mass, g) = (*mass, -case.fluid.gravity[1]);
-    let v0 = -case.bodies[0].motion_velocity_y();
-    let (c_f, t_chine) = (14.04, 0.0149);
-    // every sample while the jet root is below the chines, against the model integrated
-    // alongside (in one pass over the samples) with a step far below the run's
-    let (dt, mut t, mut h, mut v) = (1e-7, 0.0, 0.0, v0);
-    let mut errors: Vec<(f64, f64)> = Vec::new();
-    for b in bodies.iter().filter(|b| b[0] <= 0.9 * t_chine) {
-        while t < b[0] {
-            h += v * dt;
-            t += dt;
-            v = mass * (v0 + g * t) / (mass + 0.5 * c_f * RHO * h * h);
-        }
-        if b[0] >= 0.6 * t_chine {
-            errors.push((b[0], (v0 + b[5]) / (v0 - v) - 1.0));
-        }
-    }
+    let errors = momentum_model_errors(case, *mass, bodies);
     let mean = errors.iter().map(|e| e.1).sum::<f64>() / errors.len() as f64;
     let (t_worst, worst) = errors
         .iter()

@@ -6,6 +6,7 @@ mod apex;
 mod common;
 mod coupling;
 mod hydrostatics;
+mod impact;
 mod plate_impulse;
 mod probe;
 mod wedge;

@@ -56,9 +56,9 @@ fn plate_start(l0: f64, kinematics: &str, c: f64, extra: &[String]) -> Start {
             "bodies.0.polygon=[[{m}, 0.0], [{c}, 0.0], [{c}, 0.02], [{m}, 0.02]]",
             m = -c
         ),
-        // centred on the lattice's mirror line, as measured (the wedge case shifts its
-        // body 1.1 mm off it), with the default scheme's radius (the wedge case's 2.5
-        // carries 1.104 / 1.111 at 10 / 5 mm with the default projection)
+        // centred on the tank's axis, with r_e = 2.1 l0, as the added masses of
+        // docs/validation.md were measured (2.5 carries 1.104 / 1.111 at 10 / 5 mm with
+        // the default projection)
         "bodies.0.position=[0.0, 0.0]".into(),
         "scheme.radius=2.1".into(),
         format!("bodies.0.motion.velocity=[0.0, {}]", -V),

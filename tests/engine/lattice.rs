@@ -57,8 +57,10 @@ fn classic_laplacian_of_r_squared_is_2d() {
 
 #[test]
 fn reference_number_density_is_the_lattice_sum() {
-    // Koshizuka kernel at r_e = 2.1 l0: 4 neighbours at l0 (w = 1.1), 4 at sqrt2 l0, 4 at 2 l0.
-    let expected = 4.0 * 1.1 + 4.0 * (2.1 / 2f64.sqrt() - 1.0) + 4.0 * 0.05;
+    // Koshizuka kernel w = r_e/r - 1 at the default r_e = 2.5 l0: 4 neighbours at l0,
+    // 4 at sqrt2 l0, 4 at 2 l0 and 8 at sqrt5 l0.
+    let w = |r: f64| 2.5 / r - 1.0;
+    let expected = 4.0 * w(1.0) + 4.0 * w(2f64.sqrt()) + 4.0 * w(2.0) + 8.0 * w(5f64.sqrt());
     let p = MpsParameters::from_scheme(0.01, &Scheme::default(), 1000.0, 1e-6, [0.0, -9.81]);
     assert!((p.n0 - expected).abs() < 1e-12, "n0 {} vs {expected}", p.n0);
     assert_eq!(Scheme::default().kernel, KernelKind::Koshizuka);

@@ -4,6 +4,7 @@
 mod amg;
 mod amg_reuse;
 mod determinism;
+mod impact_defaults;
 mod kernels;
 mod lattice;
 mod neighbors;

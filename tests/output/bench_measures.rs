@@ -421,8 +421,8 @@ fn a_variant_changes_its_own_scheme_fields_and_keeps_the_cases_other_settings() 
         .find(|v| v.name == "classic")
         .unwrap();
     let case = run_case_value(wedge, 0.04, &classic.scheme).unwrap();
-    // the shipped wedge raises the runaway guard to 150 m/s; the variant does not touch it
-    assert_eq!(case.scheme.max_speed, Some(150.0));
+    // the shipped wedge caps the time step at 1e-4 s; the variant does not touch it
+    assert_eq!(case.time.max_dt, 1.0e-4);
     assert_eq!(case.scheme.gradient, GradientKind::MinimumPressure);
     assert_eq!(case.scheme.velocity_filter, 0.0);
     assert_eq!(case.particle_spacing, 0.04);
@@ -432,5 +432,5 @@ fn a_variant_changes_its_own_scheme_fields_and_keeps_the_cases_other_settings() 
         .unwrap();
     let case = run_case_value(wedge, 0.04, &default.scheme).unwrap();
     assert_eq!(case.scheme.gradient, Scheme::default().gradient);
-    assert_eq!(case.scheme.max_speed, Some(150.0));
+    assert_eq!(case.time.max_dt, 1.0e-4);
 }

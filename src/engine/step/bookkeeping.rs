@@ -7,6 +7,27 @@ use crate::engine::walls::WallContacts;
 use crate::math::Real;
 use rayon::prelude::*;
 
+/// How far, in cfl spacings, a particle keeping its acceleration may move in the next
+/// step: 1.2 (the dam break takes 1 262 steps against 1 266 without the bound; 1.0 gave
+/// 1 594), below the step guard's 1.5 so that the guard acts only where an acceleration
+/// starts.
+const ACCELERATION_REACH: Real = 1.2;
+
+/// The longest next step over which no particle that keeps this step's acceleration a
+/// moves more than `ACCELERATION_REACH` cfl spacings: the root of dt (|u| + |a| dt) =
+/// reach, smallest over the particles.
+pub(super) fn acceleration_limited_dt(sim: &Simulation, dt: Real) -> Real {
+    let reach = ACCELERATION_REACH * sim.config.control.cfl * sim.config.params.l0;
+    let (u, u_start) = (&sim.particles.velocity, &sim.workspace.scratch.u_start);
+    u.par_iter()
+        .zip(u_start.par_iter())
+        .map(|(u, u0)| {
+            let (speed, accel) = (u.norm(), (u - u0).norm() / dt);
+            2.0 * reach / (speed + (speed * speed + 4.0 * accel * reach).sqrt())
+        })
+        .reduce(|| Real::INFINITY, Real::min)
+}
+
 pub(super) fn remove_particles_outside_domain(sim: &mut Simulation) -> usize {
     let (lo, hi) = (sim.config.control.domain_min, sim.config.control.domain_max);
     let keep: Vec<bool> = sim

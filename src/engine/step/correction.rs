@@ -13,20 +13,10 @@ use crate::engine::walls::{moment_about, PlacedWall};
 use crate::math::{vec2, Real, Vec2};
 use rayon::prelude::*;
 
-pub(super) fn correct_velocity_and_position<K: Kernel>(
-    sim: &mut Simulation,
-    walls: &[PlacedWall],
-    dt: Real,
-    loads: &mut [WallLoad],
-) {
+/// ∇p of every particle at x*: the case's gradient form with the virtual wall points.
+pub(super) fn pressure_gradients<K: Kernel>(sim: &Simulation) -> Vec<Vec2> {
     let prm = &sim.config.params;
-    let (re, rho, c_grad, m, n0) = (
-        prm.re,
-        prm.density,
-        prm.gradient_coefficient,
-        prm.particle_mass,
-        prm.n0,
-    );
+    let (re, c_grad, n0) = (prm.re, prm.gradient_coefficient, prm.n0);
     let x = &sim.workspace.scratch.x_star;
     let p = &sim.particles.pressure;
     let nb = &sim.workspace.neighbors;
@@ -53,8 +43,7 @@ pub(super) fn correct_velocity_and_position<K: Kernel>(
     // use GC, whose moment matrix includes the virtual wall points.
     let operator_gradient = matches!(form, GradientKind::Anisotropic | GradientKind::LeastSquares);
     let lattice = Normalisation::Reference(prm.lattice);
-    // The gradient that moves the particles (fluid neighbours + virtual wall points).
-    let total: Vec<Vec2> = (0..n)
+    (0..n)
         .into_par_iter()
         .map(|i| {
             if operator_gradient && contacts.of(i).is_empty() {
@@ -66,7 +55,42 @@ pub(super) fn correct_velocity_and_position<K: Kernel>(
             let walls = contacts.virtual_points(i, neumann);
             pressure_gradient::<K>(&gradient, &cloud, p, &p_min, i, walls)
         })
-        .collect();
+        .collect()
+}
+
+/// The largest |x^{n+1} - x^n| = dt |u* - dt/rho ∇p| the correction would give.
+pub(super) fn largest_displacement(sim: &Simulation, gradient: &[Vec2], dt: Real) -> Real {
+    let scale = dt / sim.config.params.density;
+    sim.particles
+        .velocity
+        .par_iter()
+        .zip(gradient.par_iter())
+        .map(|(u, g)| (u - g * scale).norm())
+        .reduce(|| 0.0, Real::max)
+        * dt
+}
+
+/// u^{n+1} = u* - dt/rho ∇p, x^{n+1} = x* - dt²/rho ∇p, and the wall loads.
+pub(super) fn correct_velocity_and_position<K: Kernel>(
+    sim: &mut Simulation,
+    walls: &[PlacedWall],
+    total: &[Vec2],
+    dt: Real,
+    loads: &mut [WallLoad],
+) {
+    let prm = &sim.config.params;
+    let (re, rho, c_grad, m) = (
+        prm.re,
+        prm.density,
+        prm.gradient_coefficient,
+        prm.particle_mass,
+    );
+    let x = &sim.workspace.scratch.x_star;
+    let p = &sim.particles.pressure;
+    let nb = &sim.workspace.neighbors;
+    let n = x.len();
+    let contacts = &sim.workspace.contacts;
+    let neumann = &sim.workspace.scratch.neumann;
     if sim.config.method.wall_load == WallLoadKind::PressureIntegral {
         let w = |d: Real| K::w(d, re);
         let integral = pressure_loads(

@@ -34,7 +34,7 @@ mod walls;
 
 use super::config::Projection;
 use super::kernel::Kernel;
-use super::simulation::{SimError, Simulation, StageTimes, StepInfo, WallLoad};
+use super::simulation::{Attempt, SimError, Simulation, StageTimes, StepInfo, WallLoad};
 use super::walls::WallContacts;
 use crate::case::WallLoadKind;
 use crate::math::Real;
@@ -49,10 +49,22 @@ impl Simulation {
         with_kernel!(self.config.method.kernel, K => initialize::<K>(self))
     }
 
-    /// Advance by `dt`. Body wall states must hold the pose and velocity at the start of
-    /// the step; they are advanced kinematically (the coupling may overwrite them after).
+    /// Advance by `dt`, whatever the particles' displacement. Body wall states must hold
+    /// the pose and velocity at the start of the step; they are advanced kinematically
+    /// (the coupling may overwrite them after).
     pub fn step(&mut self, dt: Real) -> Result<StepInfo, SimError> {
-        with_kernel!(self.config.method.kernel, K => step::<K>(self, dt))
+        match with_kernel!(self.config.method.kernel, K => step::<K>(self, dt, None))? {
+            Attempt::Taken(info) => Ok(info),
+            Attempt::Rejected { .. } => unreachable!("a step without a displacement limit"),
+        }
+    }
+
+    /// Advance by `dt` unless a particle would move farther than the step guard allows
+    /// (`StepControl::displacement_limit`): then the state is left as it was and the
+    /// attempt says which shorter step to try (`run::advance` does so).
+    pub fn try_step(&mut self, dt: Real) -> Result<Attempt, SimError> {
+        let limit = self.config.control.displacement_limit * self.config.params.l0;
+        with_kernel!(self.config.method.kernel, K => step::<K>(self, dt, Some(limit)))
     }
 }
 
@@ -74,12 +86,24 @@ fn initialize<K: Kernel>(sim: &mut Simulation) {
     density::initial_number_density_and_divergence::<K>(sim);
 }
 
-/// The step, stage by stage.
-fn step<K: Kernel>(sim: &mut Simulation, dt: Real) -> Result<StepInfo, SimError> {
+/// The step, stage by stage. With `limit`, the step stops before the correction when a
+/// particle would move farther than `limit` and leaves the state as it found it.
+fn step<K: Kernel>(
+    sim: &mut Simulation,
+    dt: Real,
+    limit: Option<Real>,
+) -> Result<Attempt, SimError> {
     let mut times = StageTimes::default();
     let weights = KernelWeights::<K>::new(sim);
     // loads of this step, one per wall object, accumulated by every stage with a wall term
     let mut loads = vec![WallLoad::default(); sim.walls.len()];
+    // what the stages before the correction overwrite, for a step the guard turns down
+    let restore = limit.map(|_| {
+        (
+            sim.particles.pressure.clone(),
+            sim.particles.free_surface.clone(),
+        )
+    });
 
     timed(&mut times.explicit_forces, || {
         // u* = u + dt (g + nu ∇²u), paper 003 eq. 9; x* = x + dt u*, eq. 10
@@ -87,17 +111,22 @@ fn step<K: Kernel>(sim: &mut Simulation, dt: Real) -> Result<StepInfo, SimError>
         explicit::predict_positions(sim, dt);
     });
     // neighbours at x* (cell grid, counting sort)
-    timed(&mut times.neighbors, || {
-        sim.workspace.neighbors =
-            density::neighbor_list(&sim.config.params, &sim.workspace.scratch.x_star);
+    // (the lists of the last step are kept until the step is accepted: the explicit
+    // stage of a repeated step reads them)
+    let last_neighbors = timed(&mut times.neighbors, || {
+        let list = density::neighbor_list(&sim.config.params, &sim.workspace.scratch.x_star);
+        std::mem::replace(&mut sim.workspace.neighbors, list)
     });
     // the walls at their predicted pose and each particle's contacts with them
-    let walls = timed(&mut times.walls, || {
+    let (walls, last_contacts) = timed(&mut times.walls, || {
         let walls = placed_walls(sim, dt);
         let kernels = wall_kernels(sim);
-        sim.workspace.contacts =
+        let contacts =
             WallContacts::build(&sim.workspace.scratch.x_star, &walls, &kernels, &weights);
-        walls
+        (
+            walls,
+            std::mem::replace(&mut sim.workspace.contacts, contacts),
+        )
     });
     timed(&mut times.number_density, || {
         // n* with the wall lattice (Harada et al. 2008)
@@ -118,10 +147,33 @@ fn step<K: Kernel>(sim: &mut Simulation, dt: Real) -> Result<StepInfo, SimError>
         }
         Ok((iterations, residual))
     })?;
+    // ∇p of every particle (fluid neighbours and virtual wall points)
+    let gradient = timed(&mut times.correct, || {
+        correction::pressure_gradients::<K>(sim)
+    });
+    if let Some(limit) = limit {
+        // the step guard: dt was set from the speeds at the start of the step, and a
+        // jet-root particle the correction accelerates several-fold would move more
+        // than a spacing; x^{n+1} - x^n = dt u^{n+1}
+        let moved = correction::largest_displacement(sim, &gradient, dt);
+        if moved > limit {
+            let u_start = &sim.workspace.scratch.u_start;
+            sim.particles.velocity.clone_from(u_start);
+            if let Some((pressure, free_surface)) = restore {
+                sim.particles.pressure = pressure;
+                sim.particles.free_surface = free_surface;
+            }
+            sim.workspace.neighbors = last_neighbors;
+            sim.workspace.contacts = last_contacts;
+            sim.stats.rejected_steps += 1;
+            sim.stats.stage_times += times;
+            return Ok(Attempt::Rejected { dt, moved });
+        }
+    }
     timed(&mut times.correct, || {
         // u^{n+1} = u* - dt/rho ∇p, x^{n+1} = x* + dt (u^{n+1} - u*) (paper 003 eqs. 11-12);
         // the wall loads
-        correction::correct_velocity_and_position::<K>(sim, &walls, dt, &mut loads);
+        correction::correct_velocity_and_position::<K>(sim, &walls, &gradient, dt, &mut loads);
     });
     timed(&mut times.spacing, || {
         // the filter before the safety net, which must have the last word on wall approach
@@ -145,20 +197,21 @@ fn step<K: Kernel>(sim: &mut Simulation, dt: Real) -> Result<StepInfo, SimError>
         }
         sim.time += dt;
         sim.steps += 1;
+        sim.acceleration_dt = bookkeeping::acceleration_limited_dt(sim, dt);
         sim.stats.total_solver_iterations += iterations as u64;
         let removed =
             bookkeeping::remove_particles_outside_domain(sim) + bookkeeping::remove_runaways(sim);
         bookkeeping::check_health(sim).map(|max_speed| (removed, max_speed))
     })?;
     sim.stats.stage_times += times;
-    Ok(StepInfo {
+    Ok(Attempt::Taken(StepInfo {
         dt,
         solver_iterations: iterations,
         solver_residual: residual,
         unknowns: sim.workspace.scratch.matrix.n,
         max_speed,
         removed,
-    })
+    }))
 }
 
 /// Each wall object's load: pressure and viscosity; the repulsion safety net only with
