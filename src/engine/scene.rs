@@ -34,7 +34,7 @@ pub const SURFACE_CLEARANCE: Real = 0.1;
 /// line and -3.0 % 0.22 l0 off it (10-17 % apart with r_e = 2.1 l0); at 1 cm a shift of
 /// l0/32 already read like one of l0/10. Random jitter of 0.002 l0 instead broke the
 /// symmetry too but seeded number-density errors the source turns into pressure noise
-/// (the impulsively started plate lost 3 % of its added mass at 1 cm). Scenes without a
+/// (the impulsively started plate lost 2.1 % of its added mass at 1 cm). Scenes without a
 /// moving body (still water, a fixed submerged body) keep their lattice.
 pub const MIRROR_CLEARANCE: Real = 0.125;
 
