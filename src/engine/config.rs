@@ -9,7 +9,7 @@ use crate::case::{
     self, Case, GradientKind, KernelKind, LaplacianKind, Scheme, SolverKind, ViscosityKind,
     WallKinematics, WallLoadKind,
 };
-use crate::math::{vec2, Real, Vec2};
+use crate::math::{rotate, vec2, Real, Vec2};
 
 /// Source term of the pressure Poisson equation.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -236,12 +236,11 @@ pub fn jet_root_speed(body: &crate::case::Body, gravity: Vec2, fall: Real) -> Re
         return 0.0;
     }
     let d = velocity / velocity.norm();
-    let (sin, cos) = body.angle.sin_cos();
-    let world = |p: &crate::case::Point| {
-        let p = vec2(*p);
-        Vec2::new(cos * p.x - sin * p.y, sin * p.x + cos * p.y)
-    };
-    let points: Vec<Vec2> = body.polygon.iter().map(world).collect();
+    let points: Vec<Vec2> = body
+        .polygon
+        .iter()
+        .map(|p| rotate(vec2(*p), body.angle))
+        .collect();
     // counter-clockwise polygon: the outward normal of edge a→b is (t.y, -t.x)
     let deadrise = (0..points.len())
         .filter_map(|k| {

@@ -146,10 +146,7 @@ pub fn csv_rows(path: &std::path::Path, name: &str) -> Vec<Vec<f64>> {
 /// run's.
 pub fn momentum_model_errors(case: &Case, mass: Real, bodies: &[Vec<f64>]) -> Vec<(Real, Real)> {
     let g = -case.fluid.gravity[1];
-    let v0 = match &case.bodies[0].motion {
-        mpsfsi::case::Motion::Free { velocity, .. } => -velocity[1],
-        _ => panic!("not a free body"),
-    };
+    let v0 = -case.bodies[0].motion_velocity_y();
     let (c_f, t_chine) = (14.04, 0.0149);
     let (dt, mut t, mut h, mut v) = (1e-7, 0.0, 0.0, v0);
     let mut errors = Vec::new();
@@ -164,4 +161,18 @@ pub fn momentum_model_errors(case: &Case, mass: Real, bodies: &[Vec<f64>]) -> Ve
         }
     }
     errors
+}
+
+/// The vertical velocity a body's motion starts with.
+pub trait MotionVelocity {
+    fn motion_velocity_y(&self) -> f64;
+}
+
+impl MotionVelocity for mpsfsi::case::Body {
+    fn motion_velocity_y(&self) -> f64 {
+        match &self.motion {
+            mpsfsi::case::Motion::Free { velocity, .. }
+            | mpsfsi::case::Motion::Prescribed { velocity, .. } => velocity[1],
+        }
+    }
 }

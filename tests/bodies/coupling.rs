@@ -218,19 +218,6 @@ fn free_fall_wedge_slows_like_the_momentum_model() {
     );
 }
 
-trait MotionVelocity {
-    fn motion_velocity_y(&self) -> f64;
-}
-
-impl MotionVelocity for mpsfsi::case::Body {
-    fn motion_velocity_y(&self) -> f64 {
-        match &self.motion {
-            mpsfsi::case::Motion::Free { velocity, .. }
-            | mpsfsi::case::Motion::Prescribed { velocity, .. } => velocity[1],
-        }
-    }
-}
-
 /// Back-and-forth of a velocity history: Σ|Δv| - |Σ Δv|, relative to |Σ Δv|.
 fn oscillation(v: &[f64]) -> f64 {
     let total: f64 = v.windows(2).map(|w| (w[1] - w[0]).abs()).sum();
