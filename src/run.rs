@@ -175,8 +175,10 @@ pub fn run_case(
         probes,
         case.output.energy,
     )?;
-    let mut snapshots =
-        crate::output::snapshots::SnapshotWriter::create(out_dir, case.output.snapshot_interval)?;
+    let mut snapshots = crate::output::snapshots::SnapshotWriter::create(
+        out_dir,
+        case.output.snapshot_interval.seconds(case.time.end),
+    )?;
     if let Some(s) = &mut snapshots {
         s.record(&sim)?;
     }

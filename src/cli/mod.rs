@@ -1,10 +1,12 @@
-//! Command line of DESIGN.md §2.1: `run`, `check`, `schema`, `serve`, `bench`.
+//! Command line of DESIGN.md §2.1: `run`, `check`, `schema`, `serve`, `bench`, and
+//! `plot` (a flow picture from a run directory's snapshots).
 //!
 //! Exit codes: 0 success; 1 a run that failed or was cancelled (the run directory
 //! keeps what was written); 2 a rejected case or bad arguments; 3 an I/O or service error.
 
 mod check;
 mod external;
+mod plot;
 mod progress;
 mod run;
 
@@ -48,6 +50,24 @@ pub enum Command {
         /// Particle limit to validate against (the service's limit may be lower).
         #[arg(long)]
         max_particles: Option<usize>,
+    },
+    /// Draw a run's flow: the particles of the snapshot nearest `--time` coloured by a
+    /// field, with the walls and bodies at their pose, as an SVG picture.
+    Plot {
+        /// Run directory (with `snapshots/`).
+        run_dir: PathBuf,
+        /// Simulated time in s (the nearest snapshot; default: the last).
+        #[arg(long)]
+        time: Option<f64>,
+        /// pressure (Cp when a body moves), speed, velocity_x or velocity_y.
+        #[arg(long, default_value = "pressure")]
+        field: String,
+        /// Region to draw, `X0,X1,Y0,Y1` in metres (default: everything).
+        #[arg(long, allow_hyphen_values = true)]
+        window: Option<String>,
+        /// SVG file to write.
+        #[arg(long)]
+        out: PathBuf,
     },
     /// Print the JSON Schema of the case format (the text of api/case.schema.json).
     Schema,
@@ -117,6 +137,13 @@ pub fn main(cli: Cli) -> i32 {
             set,
             max_particles,
         } => check::check(&case, &set, max_particles),
+        Command::Plot {
+            run_dir,
+            time,
+            field,
+            window,
+            out,
+        } => plot::plot(&run_dir, time, &field, window.as_deref(), &out),
         Command::Schema => {
             print!("{}", mpsfsi::case::schema::case_schema_json());
             0

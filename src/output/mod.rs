@@ -6,6 +6,7 @@
 //! the impulse the fluid actually transmitted, whatever the step size.
 
 pub mod filter;
+pub mod flow;
 pub mod loads_csv;
 pub mod plot;
 pub mod probes;

@@ -16,7 +16,7 @@ pub enum PlotError {
     Drawing(String),
 }
 
-fn drawing<E: std::fmt::Debug>(e: E) -> PlotError {
+pub(super) fn drawing<E: std::fmt::Debug>(e: E) -> PlotError {
     PlotError::Drawing(format!("{e:?}"))
 }
 

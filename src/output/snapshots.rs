@@ -1,12 +1,17 @@
-//! VTK snapshots of the particles: `snapshots/step_NNNNNN.vtu` (NNNNNN the step
-//! number) every `snapshot_interval` of simulated time, the first at t = 0, and
-//! `snapshots/run.pvd`, the ParaView collection indexing them by time.
+//! VTK snapshots: `snapshots/step_NNNNNN.vtu` (the particles; NNNNNN the step number)
+//! and `snapshots/walls_NNNNNN.vtu` (every wall and body surface at its pose) every
+//! snapshot interval of simulated time, the first at t = 0, and `snapshots/run.pvd`, the
+//! ParaView collection indexing both by time, so that opening it shows the bodies moving
+//! with the water.
 //!
 //! The collection is rewritten (to a temporary file, then renamed over the old one)
 //! after every snapshot, so a running or failed job always leaves a valid `run.pvd`
 //! naming only complete `.vtu` files.
 
-use super::vtk::{pvd_string, vtu_string, PvdEntry, VtuFields};
+use super::vtk::{
+    pvd_string, vtu_string, walls_vtu_string, Outline, PvdEntry, VtuFields, PARTICLES_PART,
+    WALLS_PART,
+};
 use crate::engine::Simulation;
 use crate::math::Real;
 use std::path::{Path, PathBuf};
@@ -23,9 +28,14 @@ pub struct SnapshotWriter {
     entries: Vec<PvdEntry>,
 }
 
-/// File name of the snapshot of step `step`.
+/// File name of the particles' snapshot of step `step`.
 pub fn snapshot_file_name(step: u64) -> String {
     format!("step_{step:06}.vtu")
+}
+
+/// File name of the walls' and bodies' snapshot of step `step`.
+pub fn walls_file_name(step: u64) -> String {
+    format!("walls_{step:06}.vtu")
 }
 
 /// Write `contents` to `path` through a temporary file and a rename, so readers never
@@ -72,12 +82,46 @@ impl SnapshotWriter {
             number_density: &p.number_density,
             n0: Some(sim.config.params.n0),
             free_surface: &p.free_surface,
+            density: Some(sim.config.params.density),
+            spacing: Some(sim.config.params.l0),
         };
         let file = snapshot_file_name(sim.steps);
         write_atomically(&self.dir.join(&file), &vtu_string(&fields, sim.time))?;
+        let placed: Vec<_> = sim
+            .walls
+            .iter()
+            .map(|w| w.shape.transformed(w.state.position, w.state.angle).surface)
+            .collect();
+        let velocity: Vec<_> = sim
+            .walls
+            .iter()
+            .map(|w| move |x| w.state.point_velocity(x))
+            .collect();
+        let outlines: Vec<Outline<'_>> = sim
+            .walls
+            .iter()
+            .enumerate()
+            .map(|(k, w)| Outline {
+                segments: &placed[k],
+                moving: w.body.is_some(),
+                velocity: &velocity[k],
+                speed: w.state.velocity.norm(),
+            })
+            .collect();
+        let walls = walls_file_name(sim.steps);
+        write_atomically(
+            &self.dir.join(&walls),
+            &walls_vtu_string(&outlines, sim.time),
+        )?;
         self.entries.push(PvdEntry {
             time: sim.time,
             file,
+            part: PARTICLES_PART,
+        });
+        self.entries.push(PvdEntry {
+            time: sim.time,
+            file: walls,
+            part: WALLS_PART,
         });
         self.write_collection()?;
         while self.next_time <= sim.time + 1e-9 * self.interval {
@@ -91,7 +135,7 @@ impl SnapshotWriter {
         self.write_collection()
     }
 
-    /// Snapshots written so far (time, file relative to `snapshots/`).
+    /// Files written so far (time, file relative to `snapshots/`, part), two per snapshot.
     pub fn entries(&self) -> &[PvdEntry] {
         &self.entries
     }

@@ -1,5 +1,6 @@
-//! VTK XML files, ASCII: one UnstructuredGrid (`.vtu`) per snapshot with the particles
-//! as vertex cells, and a ParaView collection (`.pvd`) indexing them by time.
+//! VTK XML files, ASCII: per snapshot one UnstructuredGrid (`.vtu`) with the particles
+//! as vertex cells and one with the walls and bodies as line cells at their pose, and a
+//! ParaView collection (`.pvd`) indexing both by time (parts 0 and 1).
 //!
 //! The writer takes plain slices, so tests and tools can write grids without a
 //! simulation; the reader understands what the writer writes (and any ASCII `.vtu`
@@ -20,18 +21,60 @@ pub struct VtuFields<'a> {
     /// n0, to write n/n0 next to n; None leaves it out.
     pub n0: Option<Real>,
     pub free_surface: &'a [bool],
+    /// Fluid density (kg/m³) and particle spacing (m), written as field data so that a
+    /// snapshot alone can be drawn (marker size, pressure coefficient).
+    pub density: Option<Real>,
+    pub spacing: Option<Real>,
 }
 
-fn push_scalars(out: &mut String, name: &str, kind: &str, values: impl Iterator<Item = String>) {
+/// The surface of one wall or body at its pose, for the walls grid.
+pub struct Outline<'a> {
+    /// Segments facing the fluid, world frame.
+    pub segments: &'a [[Vec2; 2]],
+    /// A body (moving or free) rather than a fixed wall.
+    pub moving: bool,
+    /// Velocity of each segment end point (rigid motion), in segment order.
+    pub velocity: &'a dyn Fn(Vec2) -> Vec2,
+    /// Speed of the object's centre of mass (m/s).
+    pub speed: Real,
+}
+
+/// A float as the files hold it (10 significant digits).
+#[derive(Clone, Copy)]
+struct F(Real);
+impl std::fmt::Display for F {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(f, "{:.9e}", self.0)
+    }
+}
+
+fn push_scalars<T: std::fmt::Display>(
+    out: &mut String,
+    name: &str,
+    kind: &str,
+    values: impl Iterator<Item = T>,
+) {
+    push_array(out, name, kind, 1, values);
+}
+
+fn push_array<T: std::fmt::Display>(
+    out: &mut String,
+    name: &str,
+    kind: &str,
+    components: usize,
+    values: impl Iterator<Item = T>,
+) {
     let _ = writeln!(
         out,
-        "        <DataArray type=\"{kind}\" Name=\"{name}\" format=\"ascii\">"
+        "        <DataArray type=\"{kind}\" Name=\"{name}\" NumberOfComponents=\"{components}\" format=\"ascii\">"
     );
     push_wrapped(out, values);
     out.push_str("        </DataArray>\n");
 }
 
-fn push_wrapped(out: &mut String, values: impl Iterator<Item = String>) {
+/// Values written in place (no string per value: a 200 000-particle snapshot is about
+/// 2.4 million numbers).
+fn push_wrapped<T: std::fmt::Display>(out: &mut String, values: impl Iterator<Item = T>) {
     let mut on_line = 0;
     for v in values {
         if on_line == 0 {
@@ -39,7 +82,7 @@ fn push_wrapped(out: &mut String, values: impl Iterator<Item = String>) {
         } else {
             out.push(' ');
         }
-        out.push_str(&v);
+        let _ = write!(out, "{v}");
         on_line += 1;
         if on_line == 8 {
             out.push('\n');
@@ -50,6 +93,58 @@ fn push_wrapped(out: &mut String, values: impl Iterator<Item = String>) {
         out.push('\n');
     }
 }
+
+/// The start of a `.vtu` file up to its `<Piece>`: time and `extra` as field data.
+fn push_header(out: &mut String, time: Real, extra: &[(&str, Real)], points: usize, cells: usize) {
+    out.push_str("<?xml version=\"1.0\"?>\n");
+    out.push_str("<VTKFile type=\"UnstructuredGrid\" version=\"1.0\" byte_order=\"LittleEndian\" header_type=\"UInt64\">\n");
+    out.push_str("  <UnstructuredGrid>\n");
+    // TimeValue as field data lets ParaView show the time of a lone file.
+    out.push_str("    <FieldData>\n");
+    for (name, value) in std::iter::once(&("TimeValue", time)).chain(extra) {
+        let _ = writeln!(
+            out,
+            "      <DataArray type=\"Float64\" Name=\"{name}\" NumberOfTuples=\"1\" format=\"ascii\">{value:.12e}</DataArray>"
+        );
+    }
+    out.push_str("    </FieldData>\n");
+    let _ = writeln!(
+        out,
+        "    <Piece NumberOfPoints=\"{points}\" NumberOfCells=\"{cells}\">"
+    );
+}
+
+/// Points (z = 0), then the cells, then the end of the file.
+fn push_geometry(
+    out: &mut String,
+    points: &[Vec2],
+    connectivity: impl Iterator<Item = usize>,
+    offsets: impl Iterator<Item = usize>,
+    cell_type: u8,
+    cells: usize,
+) {
+    out.push_str("      <Points>\n");
+    push_array(
+        out,
+        "position",
+        "Float64",
+        3,
+        points.iter().flat_map(|p| [F(p.x), F(p.y), F(0.0)]),
+    );
+    out.push_str("      </Points>\n");
+    out.push_str("      <Cells>\n");
+    push_scalars(out, "connectivity", "Int64", connectivity);
+    push_scalars(out, "offsets", "Int64", offsets);
+    push_scalars(out, "types", "UInt8", std::iter::repeat_n(cell_type, cells));
+    out.push_str("      </Cells>\n");
+    out.push_str("    </Piece>\n");
+    out.push_str("  </UnstructuredGrid>\n");
+    out.push_str("</VTKFile>\n");
+}
+
+/// VTK cell types used here.
+const VTK_VERTEX: u8 = 1;
+const VTK_LINE: u8 = 3;
 
 /// The text of a `.vtu` file with the particles as vertices (z = 0) and the fields as
 /// point data (`velocity` as a 3-vector with vz = 0).
@@ -62,95 +157,106 @@ pub fn vtu_string(fields: &VtuFields<'_>, time: Real) -> String {
             && fields.free_surface.len() == n,
         "all particle fields have one value per particle"
     );
-    let mut out = String::with_capacity(200 + n * 160);
-    out.push_str("<?xml version=\"1.0\"?>\n");
-    out.push_str("<VTKFile type=\"UnstructuredGrid\" version=\"1.0\" byte_order=\"LittleEndian\" header_type=\"UInt64\">\n");
-    out.push_str("  <UnstructuredGrid>\n");
-    // TimeValue as field data lets ParaView show the time of a lone file.
-    out.push_str("    <FieldData>\n");
-    let _ = writeln!(
-        out,
-        "      <DataArray type=\"Float64\" Name=\"TimeValue\" NumberOfTuples=\"1\" format=\"ascii\">{time:.12e}</DataArray>"
-    );
-    out.push_str("    </FieldData>\n");
-    let _ = writeln!(
-        out,
-        "    <Piece NumberOfPoints=\"{n}\" NumberOfCells=\"{n}\">"
-    );
+    let mut out = String::with_capacity(1000 + n * 180);
+    let extra: Vec<(&str, Real)> = [
+        ("density", fields.density),
+        ("particle_spacing", fields.spacing),
+    ]
+    .into_iter()
+    .filter_map(|(k, v)| v.map(|v| (k, v)))
+    .collect();
+    push_header(&mut out, time, &extra, n, n);
     out.push_str("      <PointData Scalars=\"pressure\" Vectors=\"velocity\">\n");
-    let _ = writeln!(out, "        <DataArray type=\"Float64\" Name=\"velocity\" NumberOfComponents=\"3\" format=\"ascii\">");
-    push_wrapped(
+    push_array(
         &mut out,
-        fields.velocity.iter().flat_map(|v| {
-            [
-                format!("{:.9e}", v.x),
-                format!("{:.9e}", v.y),
-                "0".to_string(),
-            ]
-        }),
+        "velocity",
+        "Float64",
+        3,
+        fields
+            .velocity
+            .iter()
+            .flat_map(|v| [F(v.x), F(v.y), F(0.0)]),
     );
-    out.push_str("        </DataArray>\n");
     push_scalars(
         &mut out,
         "pressure",
         "Float64",
-        fields.pressure.iter().map(|p| format!("{p:.9e}")),
+        fields.pressure.iter().map(|p| F(*p)),
     );
     push_scalars(
         &mut out,
         "number_density",
         "Float64",
-        fields.number_density.iter().map(|v| format!("{v:.9e}")),
+        fields.number_density.iter().map(|v| F(*v)),
     );
     if let Some(n0) = fields.n0.filter(|n0| *n0 > 0.0) {
         push_scalars(
             &mut out,
             "number_density_ratio",
             "Float64",
-            fields
-                .number_density
-                .iter()
-                .map(|v| format!("{:.9e}", v / n0)),
+            fields.number_density.iter().map(|v| F(v / n0)),
         );
     }
     push_scalars(
         &mut out,
         "free_surface",
         "UInt8",
-        fields.free_surface.iter().map(|f| u8::from(*f).to_string()),
+        fields.free_surface.iter().map(|f| u8::from(*f)),
     );
     out.push_str("      </PointData>\n");
-    out.push_str("      <Points>\n");
-    out.push_str("        <DataArray type=\"Float64\" Name=\"position\" NumberOfComponents=\"3\" format=\"ascii\">\n");
-    push_wrapped(
-        &mut out,
-        fields.position.iter().flat_map(|p| {
-            [
-                format!("{:.9e}", p.x),
-                format!("{:.9e}", p.y),
-                "0".to_string(),
-            ]
-        }),
-    );
-    out.push_str("        </DataArray>\n");
-    out.push_str("      </Points>\n");
-    out.push_str("      <Cells>\n");
-    out.push_str("        <DataArray type=\"Int64\" Name=\"connectivity\" format=\"ascii\">\n");
-    push_wrapped(&mut out, (0..n).map(|i| i.to_string()));
-    out.push_str("        </DataArray>\n");
-    out.push_str("        <DataArray type=\"Int64\" Name=\"offsets\" format=\"ascii\">\n");
-    push_wrapped(&mut out, (1..=n).map(|i| i.to_string()));
-    out.push_str("        </DataArray>\n");
-    // VTK_VERTEX = 1
-    out.push_str("        <DataArray type=\"UInt8\" Name=\"types\" format=\"ascii\">\n");
-    push_wrapped(&mut out, (0..n).map(|_| "1".to_string()));
-    out.push_str("        </DataArray>\n");
-    out.push_str("      </Cells>\n");
-    out.push_str("    </Piece>\n");
-    out.push_str("  </UnstructuredGrid>\n");
-    out.push_str("</VTKFile>\n");
+    push_geometry(&mut out, fields.position, 0..n, 1..=n, VTK_VERTEX, n);
     out
 }
+
+/// The text of a `.vtu` file with every wall and body surface segment as a line cell at
+/// its pose. Cell data: `object` (the outline's index, the order of loads.csv's names),
+/// `moving` (1 for a body) and `speed` (its centre of mass's, m/s); point data:
+/// `velocity` of the material point.
+pub fn walls_vtu_string(outlines: &[Outline<'_>], time: Real) -> String {
+    let mut points = Vec::new();
+    let mut velocity = Vec::new();
+    let (mut object, mut moving, mut speed) = (Vec::new(), Vec::new(), Vec::new());
+    for (k, o) in outlines.iter().enumerate() {
+        for [a, b] in o.segments {
+            points.extend([*a, *b]);
+            velocity.extend([(o.velocity)(*a), (o.velocity)(*b)]);
+            object.push(k);
+            moving.push(u8::from(o.moving));
+            speed.push(F(o.speed));
+        }
+    }
+    let cells = object.len();
+    let mut out = String::with_capacity(1000 + cells * 200);
+    push_header(&mut out, time, &[], points.len(), cells);
+    out.push_str("      <PointData Vectors=\"velocity\">\n");
+    push_array(
+        &mut out,
+        "velocity",
+        "Float64",
+        3,
+        velocity.iter().flat_map(|v| [F(v.x), F(v.y), F(0.0)]),
+    );
+    out.push_str("      </PointData>\n");
+    out.push_str("      <CellData Scalars=\"object\">\n");
+    push_scalars(&mut out, "object", "Int32", object.into_iter());
+    push_scalars(&mut out, "moving", "UInt8", moving.into_iter());
+    push_scalars(&mut out, "speed", "Float64", speed.into_iter());
+    out.push_str("      </CellData>\n");
+    push_geometry(
+        &mut out,
+        &points,
+        0..points.len(),
+        (1..=cells).map(|c| 2 * c),
+        VTK_LINE,
+        cells,
+    );
+    out
+}
+
+/// The collection's part holding the particles.
+pub const PARTICLES_PART: u32 = 0;
+/// The collection's part holding the walls and bodies.
+pub const WALLS_PART: u32 = 1;
 
 /// One entry of a `.pvd` collection.
 #[derive(Debug, Clone, PartialEq)]
@@ -158,6 +264,8 @@ pub struct PvdEntry {
     pub time: Real,
     /// Path of the `.vtu`, relative to the `.pvd`.
     pub file: String,
+    /// [`PARTICLES_PART`] or [`WALLS_PART`]: ParaView shows the parts of one time together.
+    pub part: u32,
 }
 
 /// The text of a `.pvd` collection listing `entries` in order.
@@ -169,8 +277,9 @@ pub fn pvd_string(entries: &[PvdEntry]) -> String {
     for e in entries {
         let _ = writeln!(
             out,
-            "    <DataSet timestep=\"{:.12e}\" group=\"\" part=\"0\" file=\"{}\"/>",
+            "    <DataSet timestep=\"{:.12e}\" group=\"\" part=\"{}\" file=\"{}\"/>",
             e.time,
+            e.part,
             xml_escape(&e.file)
         );
     }
@@ -278,20 +387,30 @@ pub fn parse_pvd(text: &str) -> io::Result<Vec<PvdEntry>> {
             .get("file")
             .ok_or_else(|| bad("DataSet without file"))?
             .clone();
-        entries.push(PvdEntry { time, file });
+        let part = match tag.attributes.get("part") {
+            None => PARTICLES_PART,
+            Some(p) => p.parse().map_err(|e| bad(format!("part: {e}")))?,
+        };
+        entries.push(PvdEntry { time, file, part });
         at = tag.end;
     }
     Ok(entries)
 }
 
-/// A `.vtu` read back: points and named point-data arrays.
+/// A `.vtu` read back: points, cells and named data arrays.
 #[derive(Debug, Clone, Default, PartialEq)]
 pub struct VtuData {
     pub time: Option<Real>,
+    /// Field data other than the time (one value each).
+    pub field_data: BTreeMap<String, Real>,
     pub points: Vec<[Real; 3]>,
     pub cells: usize,
+    /// Point indices of the cells, in order; cell k ends at `offsets[k]`.
+    pub connectivity: Vec<usize>,
+    pub offsets: Vec<usize>,
     /// Name -> (components, values flattened).
     pub point_data: BTreeMap<String, (usize, Vec<Real>)>,
+    pub cell_data: BTreeMap<String, (usize, Vec<Real>)>,
 }
 
 impl VtuData {
@@ -301,6 +420,20 @@ impl VtuData {
             .get(name)
             .filter(|(c, _)| *c == 1)
             .map(|(_, v)| v.as_slice())
+    }
+
+    /// A scalar cell-data array by name.
+    pub fn cell_scalar(&self, name: &str) -> Option<&[Real]> {
+        self.cell_data
+            .get(name)
+            .filter(|(c, _)| *c == 1)
+            .map(|(_, v)| v.as_slice())
+    }
+
+    /// The point indices of cell `k`.
+    pub fn cell(&self, k: usize) -> &[usize] {
+        let start = if k == 0 { 0 } else { self.offsets[k - 1] };
+        &self.connectivity[start..self.offsets[k]]
     }
 }
 
@@ -355,8 +488,13 @@ pub fn parse_vtu(text: &str) -> io::Result<VtuData> {
         if tag.end > piece.end {
             break;
         }
-        if tag.attributes.get("Name").map(String::as_str) == Some("TimeValue") {
-            data.time = data_array_values(text, &tag)?.first().copied();
+        let value = data_array_values(text, &tag)?.first().copied();
+        match (tag.attributes.get("Name").map(String::as_str), value) {
+            (Some("TimeValue"), _) => data.time = value,
+            (Some(name), Some(v)) => {
+                data.field_data.insert(name.to_string(), v);
+            }
+            _ => {}
         }
         at = tag.end;
     }
@@ -385,14 +523,20 @@ pub fn parse_vtu(text: &str) -> io::Result<VtuData> {
     } else {
         return Err(bad("no <Points>"));
     }
-    if let Some((start, end)) = section("PointData")? {
+    for (name, count, map) in [
+        ("PointData", n, &mut data.point_data),
+        ("CellData", cells, &mut data.cell_data),
+    ] {
+        let Some((start, end)) = section(name)? else {
+            continue;
+        };
         let mut at = start;
         while let Some(tag) = next_tag(text, "DataArray", at)?.filter(|t| t.end <= end) {
-            let name = tag
+            let array = tag
                 .attributes
                 .get("Name")
                 .cloned()
-                .ok_or_else(|| bad("point DataArray without Name"))?;
+                .ok_or_else(|| bad(format!("{name} DataArray without Name")))?;
             let components: usize = tag
                 .attributes
                 .get("NumberOfComponents")
@@ -400,28 +544,41 @@ pub fn parse_vtu(text: &str) -> io::Result<VtuData> {
                 .transpose()?
                 .unwrap_or(1);
             let values = data_array_values(text, &tag)?;
-            if values.len() != components * n {
+            if values.len() != components * count {
                 return Err(bad(format!(
-                    "point data {name}: {} values for {n} points x {components}",
+                    "{name} {array}: {} values for {count} x {components}",
                     values.len()
                 )));
             }
-            data.point_data.insert(name, (components, values));
+            map.insert(array, (components, values));
             at = tag.end;
         }
     }
     if let Some((start, end)) = section("Cells")? {
         let mut at = start;
         while let Some(tag) = next_tag(text, "DataArray", at)?.filter(|t| t.end <= end) {
-            let len = data_array_values(text, &tag)?.len();
+            let values = data_array_values(text, &tag)?;
+            let len = values.len();
             let name = tag.attributes.get("Name").cloned().unwrap_or_default();
             if matches!(name.as_str(), "offsets" | "types") && len != cells {
                 return Err(bad(format!(
                     "cell array {name}: {len} values for {cells} cells"
                 )));
             }
+            let indices = || values.iter().map(|v| *v as usize).collect::<Vec<_>>();
+            match name.as_str() {
+                "connectivity" => data.connectivity = indices(),
+                "offsets" => data.offsets = indices(),
+                _ => {}
+            }
             at = tag.end;
         }
+    }
+    let consistent = data.offsets.windows(2).all(|w| w[0] <= w[1])
+        && data.offsets.last().copied().unwrap_or(0) == data.connectivity.len()
+        && data.connectivity.iter().all(|&i| i < n);
+    if !consistent {
+        return Err(bad("cell offsets or connectivity out of range"));
     }
     Ok(data)
 }

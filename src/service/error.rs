@@ -23,6 +23,8 @@ pub enum ApiError {
     JobNotFound(String),
     #[error("job {id} has already finished ({status})")]
     AlreadyFinished { id: String, status: String },
+    #[error("job {0} has no snapshots (yet): its case sets output.snapshot_interval to \"none\", or no snapshot has been written")]
+    NoSnapshots(String),
     #[error("no route for {0}")]
     RouteNotFound(String),
     #[error("method not allowed")]
@@ -44,7 +46,9 @@ impl ApiError {
             Self::InvalidCase(_) => StatusCode::UNPROCESSABLE_ENTITY,
             Self::PayloadTooLarge { .. } => StatusCode::PAYLOAD_TOO_LARGE,
             Self::QueueFull { .. } | Self::ShuttingDown => StatusCode::SERVICE_UNAVAILABLE,
-            Self::JobNotFound(_) | Self::RouteNotFound(_) => StatusCode::NOT_FOUND,
+            Self::JobNotFound(_) | Self::RouteNotFound(_) | Self::NoSnapshots(_) => {
+                StatusCode::NOT_FOUND
+            }
             Self::AlreadyFinished { .. } => StatusCode::CONFLICT,
             Self::MethodNotAllowed => StatusCode::METHOD_NOT_ALLOWED,
             Self::Internal(_) => StatusCode::INTERNAL_SERVER_ERROR,
@@ -61,6 +65,7 @@ impl ApiError {
             Self::BadRequest(_) => "bad_request",
             Self::JobNotFound(_) => "job_not_found",
             Self::AlreadyFinished { .. } => "job_finished",
+            Self::NoSnapshots(_) => "no_snapshots",
             Self::RouteNotFound(_) => "route_not_found",
             Self::MethodNotAllowed => "method_not_allowed",
             Self::ShuttingDown => "shutting_down",

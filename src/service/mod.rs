@@ -22,6 +22,7 @@
 
 pub mod config;
 pub mod error;
+pub mod page;
 pub mod routes;
 pub mod series;
 pub mod startup;

@@ -6,6 +6,10 @@ use super::series::{self, SeriesFile};
 use super::store::{Admission, JobRow, JobStatus};
 use super::workers::Jobs;
 use crate::case::{parse_case_value, validate};
+use crate::output::flow::{
+    flow_svg, parse_window, read_snapshot, snapshot_times, title, FlowField, SnapshotError,
+};
+use crate::output::plot::PlotError;
 use axum::body::Bytes;
 use axum::extract::rejection::{BytesRejection, QueryRejection};
 use axum::extract::{DefaultBodyLimit, Path, Query, State};
@@ -58,6 +62,11 @@ pub fn endpoints() -> Vec<(Method, &'static str, MethodRouter<AppState>)> {
             Method::GET,
             "/v1/jobs/{id}/loads.svg",
             on(MethodFilter::GET, get_loads_svg),
+        ),
+        (
+            Method::GET,
+            "/v1/jobs/{id}/snapshot.svg",
+            on(MethodFilter::GET, get_snapshot_svg),
         ),
         (Method::GET, "/v1/health", on(MethodFilter::GET, health)),
         (
@@ -117,6 +126,7 @@ pub fn job_json(row: &JobRow) -> Value {
             "self": base,
             "loads": format!("{base}/loads"),
             "loads_svg": format!("{base}/loads.svg"),
+            "snapshot_svg": format!("{base}/snapshot.svg"),
             "bodies": format!("{base}/bodies"),
             "probes": format!("{base}/probes"),
         },
@@ -252,12 +262,24 @@ async fn list_jobs(
     ))
 }
 
-#[tracing::instrument(name = "get job", skip(state))]
+/// The job record as JSON, or its page for a browser (`Accept: text/html`).
+#[tracing::instrument(name = "get job", skip(state, headers))]
 async fn get_job(
     State(state): State<AppState>,
     Path(id): Path<String>,
-) -> Result<Json<Value>, ApiError> {
-    Ok(Json(job_json(&find_job(&state, &id).await?)))
+    headers: HeaderMap,
+) -> Result<Response, ApiError> {
+    let row = find_job(&state, &id).await?;
+    if accepts(&headers, "text/html") {
+        let dir = state.jobs.config.job_dir(&row.id);
+        let times = tokio::task::spawn_blocking(move || snapshot_times(&dir))
+            .await
+            .map_err(ApiError::internal)?
+            .map_err(ApiError::internal)?;
+        let html = super::page::job_page(&row, &job_json(&row), &times);
+        return Ok(([(header::CONTENT_TYPE, "text/html; charset=utf-8")], html).into_response());
+    }
+    Ok(Json(job_json(&row)).into_response())
 }
 
 #[tracing::instrument(name = "cancel job", skip(state))]
@@ -285,12 +307,18 @@ async fn cancel_job(
     Ok((StatusCode::ACCEPTED, Json(job_json(&row))).into_response())
 }
 
-fn wants_csv(headers: &HeaderMap) -> bool {
+/// Whether the Accept header names `media_type` (a browser's `text/html,...`; `*/*`
+/// alone keeps JSON).
+fn accepts(headers: &HeaderMap, media_type: &str) -> bool {
     headers
         .get_all(header::ACCEPT)
         .iter()
         .filter_map(|v| v.to_str().ok())
-        .any(|v| v.split(',').any(|part| part.trim().starts_with("text/csv")))
+        .any(|v| v.split(',').any(|part| part.trim().starts_with(media_type)))
+}
+
+fn wants_csv(headers: &HeaderMap) -> bool {
+    accepts(headers, "text/csv")
 }
 
 /// The complete lines of a job's CSV file, or the header alone when nothing exists yet.
@@ -368,6 +396,60 @@ async fn get_loads_svg(
         .await
         .map_err(ApiError::internal)?
         .map_err(ApiError::internal)?;
+    Ok(([(header::CONTENT_TYPE, "image/svg+xml")], svg).into_response())
+}
+
+#[derive(Debug, Deserialize)]
+struct SnapshotQuery {
+    time: Option<f64>,
+    field: Option<String>,
+    window: Option<String>,
+}
+
+#[tracing::instrument(name = "get snapshot plot", skip(state))]
+async fn get_snapshot_svg(
+    State(state): State<AppState>,
+    Path(id): Path<String>,
+    query: Result<Query<SnapshotQuery>, QueryRejection>,
+) -> Result<Response, ApiError> {
+    let Query(query) = query.map_err(|e| ApiError::BadRequest(e.body_text()))?;
+    let field = match query.field.as_deref() {
+        None => FlowField::Pressure,
+        Some(name) => FlowField::parse(name).ok_or_else(|| {
+            ApiError::BadRequest(format!(
+                "field {name:?}: expected one of {}",
+                FlowField::NAMES.join(", ")
+            ))
+        })?,
+    };
+    if query.time.is_some_and(|t| !t.is_finite()) {
+        return Err(ApiError::BadRequest(
+            "time must be a finite number of seconds".into(),
+        ));
+    }
+    let window = query
+        .window
+        .as_deref()
+        .map(parse_window)
+        .transpose()
+        .map_err(|e| ApiError::BadRequest(format!("window: {e}")))?;
+    let row = find_job(&state, &id).await?;
+    let dir = state.jobs.config.job_dir(&row.id);
+    let name = row.name.clone();
+    let svg = tokio::task::spawn_blocking(move || {
+        let snapshot = read_snapshot(&dir, query.time).map_err(|e| match e {
+            SnapshotError::None => ApiError::NoSnapshots(id),
+            SnapshotError::Io(e) => ApiError::internal(e),
+        })?;
+        flow_svg(&snapshot, field, window, &title(&name, &snapshot))
+            .map(|(svg, _)| svg)
+            .map_err(|e| match e {
+                PlotError::Data(m) => ApiError::BadRequest(m),
+                e => ApiError::internal(e),
+            })
+    })
+    .await
+    .map_err(ApiError::internal)??;
     Ok(([(header::CONTENT_TYPE, "image/svg+xml")], svg).into_response())
 }
 

@@ -3,7 +3,9 @@ use mpsfsi::case::{parse_case_value, Limits, ValidCase};
 use mpsfsi::engine::Simulation;
 use mpsfsi::math::Vec2;
 use mpsfsi::output::snapshots::SnapshotWriter;
-use mpsfsi::output::vtk::{parse_pvd, parse_vtu, pvd_string, vtu_string, PvdEntry, VtuFields};
+use mpsfsi::output::vtk::{
+    parse_pvd, parse_vtu, pvd_string, vtu_string, PvdEntry, VtuFields, PARTICLES_PART, WALLS_PART,
+};
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 
@@ -27,11 +29,16 @@ fn vtu_round_trips_points_and_point_data() {
         number_density: &number_density,
         n0: Some(6.5),
         free_surface: &free_surface,
+        density: Some(998.2),
+        spacing: Some(0.01),
     };
     let grid = parse_vtu(&vtu_string(&fields, 0.125)).unwrap();
     assert_eq!(grid.points.len(), n);
     assert_eq!(grid.cells, n);
     assert_eq!(grid.time, Some(0.125));
+    assert_eq!(grid.field_data["density"], 998.2);
+    assert_eq!(grid.field_data["particle_spacing"], 0.01);
+    assert_eq!(grid.offsets, (1..=n).collect::<Vec<_>>());
     let close = |a: f64, b: f64| (a - b).abs() <= 1e-8 * (1.0 + b.abs());
     for i in 0..n {
         assert!(
@@ -75,6 +82,8 @@ fn the_reader_rejects_truncated_or_inconsistent_files() {
             number_density: &s,
             n0: None,
             free_surface: &f,
+            density: None,
+            spacing: None,
         },
         0.0,
     );
@@ -87,17 +96,20 @@ fn the_reader_rejects_truncated_or_inconsistent_files() {
         parse_vtu(&text.replace("NumberOfPoints=\"2\"", "NumberOfPoints=\"3\"")).is_err(),
         "counts must agree"
     );
-    let pvd = pvd_string(&[PvdEntry {
-        time: 0.5,
-        file: "a.vtu".into(),
-    }]);
-    assert_eq!(
-        parse_pvd(&pvd).unwrap(),
-        vec![PvdEntry {
+    let entries = vec![
+        PvdEntry {
             time: 0.5,
-            file: "a.vtu".into()
-        }]
-    );
+            file: "a.vtu".into(),
+            part: PARTICLES_PART,
+        },
+        PvdEntry {
+            time: 0.5,
+            file: "b.vtu".into(),
+            part: WALLS_PART,
+        },
+    ];
+    let pvd = pvd_string(&entries);
+    assert_eq!(parse_pvd(&pvd).unwrap(), entries);
     assert!(parse_pvd(&pvd[..pvd.len() - 12]).is_err());
 }
 
@@ -136,9 +148,20 @@ fn the_collection_is_valid_after_every_snapshot() {
             last_file = format!("step_{step:06}.vtu");
         }
         let entries = parse_pvd(&std::fs::read_to_string(&pvd).unwrap()).unwrap();
-        assert_eq!(entries.len(), expected, "after t = {time}");
-        let last = entries.last().unwrap();
+        assert_eq!(entries.len(), 2 * expected, "after t = {time}");
+        let particles: Vec<_> = entries
+            .iter()
+            .filter(|e| e.part == PARTICLES_PART)
+            .collect();
+        assert_eq!(particles.len(), expected, "one particle file per snapshot");
+        let last = particles.last().unwrap();
         assert_eq!(last.file, last_file);
+        let walls = entries.iter().rfind(|e| e.part == WALLS_PART).unwrap();
+        assert_eq!(
+            walls.time, last.time,
+            "walls and particles share the snapshot's time"
+        );
+        assert!(dir.join("snapshots").join(&walls.file).is_file());
         let grid =
             parse_vtu(&std::fs::read_to_string(dir.join("snapshots").join(&last.file)).unwrap())
                 .unwrap();
@@ -156,8 +179,12 @@ fn a_run_writes_one_snapshot_per_interval_with_all_particles() {
     let dir = scratch_dir("run-snapshots");
     let summary = mpsfsi::run::run_case(&case, &dir, &mut mpsfsi::run::Quiet).unwrap();
     assert_eq!(summary.status, mpsfsi::run::RunStatus::Succeeded);
-    let entries =
-        parse_pvd(&std::fs::read_to_string(dir.join("snapshots/run.pvd")).unwrap()).unwrap();
+    let entries: Vec<PvdEntry> =
+        parse_pvd(&std::fs::read_to_string(dir.join("snapshots/run.pvd")).unwrap())
+            .unwrap()
+            .into_iter()
+            .filter(|e| e.part == PARTICLES_PART)
+            .collect();
     // t = 0, 0.01, ..., 0.05
     assert_eq!(entries.len(), 6, "{entries:?}");
     for (k, e) in entries.iter().enumerate() {

@@ -191,11 +191,11 @@ pub(super) fn check_scalars(case: &Case) -> Check {
             "the interval between load rows in s (null: every step)",
         )?;
     }
-    if let Some(v) = o.snapshot_interval {
+    if let crate::case::SnapshotInterval::Every(v) = o.snapshot_interval {
         positive(
             "output.snapshot_interval",
             v,
-            "the interval between snapshots in s (null: none)",
+            "the interval between snapshots in s (\"auto\": ten over the run, \"none\": none)",
         )?;
     }
     if let Some(v) = o.filter_window {

@@ -1,0 +1,137 @@
+//! The job page (`GET /v1/jobs/{id}` with `Accept: text/html`): one self-contained HTML
+//! document, no framework and nothing fetched from elsewhere, so it works offline. It
+//! shows the status and progress (reloading every few seconds while the job is not
+//! finished), the load plot and the flow pictures with a time slider, all drawn by the
+//! service's own SVG routes.
+//!
+//! Each picture's `<img>` gets `data-rendered="yes"` once it has loaded with a non-zero
+//! size (`"no"` on an error), which is what the browser test reads.
+
+use super::store::JobRow;
+use serde_json::Value;
+use std::fmt::Write as _;
+
+/// Seconds between reloads while a job is queued or running.
+const REFRESH_S: u32 = 5;
+
+fn escape(s: &str) -> String {
+    s.replace('&', "&amp;")
+        .replace('<', "&lt;")
+        .replace('>', "&gt;")
+        .replace('"', "&quot;")
+        .replace('\'', "&#39;")
+}
+
+const STYLE: &str = "body{font-family:sans-serif;margin:1.5em;max-width:1300px;color:#222}\
+img{max-width:100%;border:1px solid #ddd}progress{width:30em}\
+table{border-collapse:collapse}td{padding:2px 12px 2px 0}\
+pre{background:#f6f6f6;padding:8px;overflow:auto;max-height:20em}";
+
+const SCRIPT: &str = r#"
+function watch(img) {
+  const mark = () => { img.dataset.rendered = img.naturalWidth > 0 ? "yes" : "no"; };
+  img.addEventListener("load", mark);
+  img.addEventListener("error", () => { img.dataset.rendered = "no"; });
+  if (img.complete) mark();
+}
+document.querySelectorAll("img").forEach(watch);
+const flow = document.getElementById("flow");
+if (flow) {
+  const times = JSON.parse(flow.dataset.times);
+  const slider = document.getElementById("time");
+  const field = document.getElementById("field");
+  const label = document.getElementById("time-label");
+  const show = () => {
+    const t = times[Number(slider.value)];
+    label.textContent = "t = " + (t * 1e3).toFixed(3) + " ms";
+    flow.dataset.rendered = "";
+    flow.src = flow.dataset.base + "?time=" + t + "&field=" + field.value;
+  };
+  slider.addEventListener("input", show);
+  field.addEventListener("change", show);
+}
+"#;
+
+/// The page of job `row` (`json`: its record as the API serves it; `snapshot_times`:
+/// the snapshots written so far).
+pub fn job_page(row: &JobRow, json: &Value, snapshot_times: &[f64]) -> String {
+    let base = format!("/v1/jobs/{}", row.id);
+    let name = escape(&row.name);
+    let status = row.status.as_str();
+    let fraction = json["progress"]["fraction"].as_f64().unwrap_or(0.0);
+    let mut html = String::new();
+    html.push_str("<!DOCTYPE html>\n<html lang=\"en\"><head><meta charset=\"utf-8\">\n");
+    let _ = writeln!(html, "<title>{name}: {status}</title>");
+    if !row.status.is_finished() {
+        let _ = writeln!(
+            html,
+            "<meta http-equiv=\"refresh\" content=\"{REFRESH_S}\">"
+        );
+    }
+    let _ = writeln!(html, "<style>{STYLE}</style></head><body>");
+    let _ = writeln!(html, "<h1>{name}</h1>");
+    let _ = writeln!(
+        html,
+        "<p id=\"status\">Status: <b>{status}</b>{}</p>",
+        row.reason
+            .as_deref()
+            .map(|r| format!(" ({})", escape(r)))
+            .unwrap_or_default()
+    );
+    let _ = writeln!(
+        html,
+        "<p><progress value=\"{fraction:.4}\" max=\"1\"></progress> {:.1} %: t = {:.4} ms of {:.4} ms, step {}</p>",
+        100.0 * fraction,
+        row.simulated_time * 1e3,
+        row.end_time * 1e3,
+        row.step
+    );
+    let _ = writeln!(
+        html,
+        "<table><tr><td>job</td><td>{}</td></tr><tr><td>created</td><td>{}</td></tr>\
+         <tr><td>started</td><td>{}</td></tr><tr><td>finished</td><td>{}</td></tr>\
+         <tr><td>particles</td><td>{}</td></tr></table>",
+        row.id,
+        escape(&row.created_at),
+        escape(row.started_at.as_deref().unwrap_or("")),
+        escape(row.finished_at.as_deref().unwrap_or("")),
+        row.particles.map(|p| p.to_string()).unwrap_or_default()
+    );
+    html.push_str("<h2>Loads</h2>\n");
+    let _ = writeln!(
+        html,
+        "<p><a href=\"{base}/loads\">JSON</a> · CSV with <code>Accept: text/csv</code></p>\
+         <img id=\"loads\" src=\"{base}/loads.svg\" alt=\"load history\">"
+    );
+    html.push_str("<h2>Flow</h2>\n");
+    match snapshot_times.last() {
+        None => html.push_str(
+            "<p id=\"no-flow\">No snapshots yet (or the case sets <code>output.snapshot_interval</code> to \"none\").</p>\n",
+        ),
+        Some(last) => {
+            let times = serde_json::to_string(snapshot_times).unwrap_or_else(|_| "[]".into());
+            let _ = writeln!(
+                html,
+                "<p><label>field <select id=\"field\">\
+                 <option value=\"pressure\">pressure</option><option value=\"speed\">speed</option>\
+                 <option value=\"velocity_x\">velocity x</option><option value=\"velocity_y\">velocity y</option>\
+                 </select></label> <label>time <input id=\"time\" type=\"range\" min=\"0\" max=\"{}\" value=\"{}\"></label> \
+                 <span id=\"time-label\">t = {:.3} ms</span></p>",
+                snapshot_times.len() - 1,
+                snapshot_times.len() - 1,
+                last * 1e3
+            );
+            let _ = writeln!(
+                html,
+                "<img id=\"flow\" alt=\"flow picture\" data-base=\"{base}/snapshot.svg\" data-times=\"{}\" src=\"{base}/snapshot.svg?time={last}&amp;field=pressure\">",
+                escape(&times)
+            );
+        }
+    }
+    if let Some(summary) = json.get("summary").filter(|s| !s.is_null()) {
+        let text = serde_json::to_string_pretty(summary).unwrap_or_default();
+        let _ = writeln!(html, "<h2>Summary</h2>\n<pre>{}</pre>", escape(&text));
+    }
+    let _ = writeln!(html, "<script>{SCRIPT}</script>\n</body></html>");
+    html
+}
