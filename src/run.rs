@@ -40,6 +40,16 @@ pub trait Observer {
     fn is_cancelled(&self) -> bool {
         false
     }
+    /// Status and reason of summary.json when the run stops because `is_cancelled` said
+    /// so (at `step`, simulated time `time`). Default: `cancelled`. The service's
+    /// observer says `failed` / `interrupted` when its own shutdown stopped the job, so
+    /// that summary.json and the job record agree; the CLI's names the signal.
+    fn stop_reason(&self, step: u64, time: Real) -> (RunStatus, String) {
+        (
+            RunStatus::Cancelled,
+            SimError::Cancelled { step, time }.to_string(),
+        )
+    }
 }
 
 /// An observer that ignores everything.
@@ -188,14 +198,7 @@ pub fn run_case(
     let mut failure: Option<(RunStatus, String)> = None;
     while sim.time < end * (1.0 - 1e-12) {
         if observer.is_cancelled() {
-            failure = Some((
-                RunStatus::Cancelled,
-                SimError::Cancelled {
-                    step: sim.steps,
-                    time: sim.time,
-                }
-                .to_string(),
-            ));
+            failure = Some(observer.stop_reason(sim.steps, sim.time));
             break;
         }
         // do not overshoot the end time by more than a sliver

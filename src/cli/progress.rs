@@ -1,9 +1,13 @@
 //! A progress bar on stderr (simulated time / end time, steps, particles, ETA), shown
-//! only when stderr is a terminal; otherwise nothing is drawn.
+//! only when stderr is a terminal; otherwise nothing is drawn. The observer also stops
+//! the run once the signal handler of `mpsfsi run` sets its interrupt flag.
 
 use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
-use mpsfsi::run::{Observer, Progress};
+use mpsfsi::math::Real;
+use mpsfsi::run::{Observer, Progress, RunStatus};
 use std::io::IsTerminal;
+use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::Arc;
 use std::time::{Duration, Instant};
 
 /// Resolution of the bar: positions are fractions of the end time in these units.
@@ -12,11 +16,14 @@ const TICKS: u64 = 10_000;
 pub struct ProgressBarObserver {
     bar: Option<ProgressBar>,
     last_draw: Instant,
+    /// Set by a signal (Ctrl-C, SIGTERM, SIGHUP): the run stops before its next step.
+    interrupted: Arc<AtomicBool>,
 }
 
 impl ProgressBarObserver {
-    /// A bar when stderr is a terminal, silence otherwise.
-    pub fn for_stderr() -> Self {
+    /// A bar when stderr is a terminal, silence otherwise; the run stops once
+    /// `interrupted` is set.
+    pub fn for_stderr(interrupted: Arc<AtomicBool>) -> Self {
         let bar = std::io::stderr().is_terminal().then(|| {
             let bar =
                 ProgressBar::with_draw_target(Some(TICKS), ProgressDrawTarget::stderr_with_hz(5));
@@ -32,6 +39,16 @@ impl ProgressBarObserver {
         Self {
             bar,
             last_draw: Instant::now(),
+            interrupted,
+        }
+    }
+
+    /// Prints a line on stderr from any thread, above the bar if there is one.
+    pub fn line_printer(&self) -> impl Fn(&str) + Send + 'static {
+        let bar = self.bar.clone();
+        move |line| match &bar {
+            Some(bar) => bar.suspend(|| eprintln!("{line}")),
+            None => eprintln!("{line}"),
         }
     }
 
@@ -63,6 +80,18 @@ impl Observer for ProgressBarObserver {
             "t = {:.4}/{:.4} s  step {}  dt {:.2e} s  {} particles",
             p.simulated_time, p.end_time, p.step, p.dt, p.particles
         ));
+    }
+
+    fn is_cancelled(&self) -> bool {
+        self.interrupted.load(Ordering::SeqCst)
+    }
+
+    /// ctrlc runs one handler for SIGINT, SIGTERM and SIGHUP without saying which came.
+    fn stop_reason(&self, step: u64, time: Real) -> (RunStatus, String) {
+        (
+            RunStatus::Cancelled,
+            format!("interrupted by a signal (SIGINT, SIGTERM or SIGHUP) at step {step}, t = {time:.6} s"),
+        )
     }
 }
 

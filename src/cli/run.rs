@@ -1,10 +1,16 @@
 //! `mpsfsi run CASE --out DIR [--set PATH=VALUE]...`
+//!
+//! Ctrl-C (SIGINT), SIGTERM or SIGHUP ends the run after the current step: everything
+//! written stays, summary.json says `cancelled` with the step and time, exit code 1. A
+//! second signal exits at once, without summary.json.
 
 use super::progress::ProgressBarObserver;
 use super::{report_case_error, EXIT_ERROR, EXIT_FAILED_RUN};
 use mpsfsi::case::{load_case_file, Limits, ValidCase};
 use mpsfsi::run::{run_case, RunStatus};
 use std::path::Path;
+use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::Arc;
 
 pub fn run(case_path: &Path, out: &Path, overrides: &[String]) -> i32 {
     let case = match load_case_file(case_path, overrides)
@@ -20,7 +26,9 @@ pub fn run(case_path: &Path, out: &Path, overrides: &[String]) -> i32 {
         );
         return EXIT_ERROR;
     }
-    let mut observer = ProgressBarObserver::for_stderr();
+    let interrupted = Arc::new(AtomicBool::new(false));
+    let mut observer = ProgressBarObserver::for_stderr(interrupted.clone());
+    stop_on_signals(interrupted, observer.line_printer());
     let result = run_case(&case, out, &mut observer);
     observer.finish();
     match result {
@@ -63,5 +71,20 @@ pub fn run(case_path: &Path, out: &Path, overrides: &[String]) -> i32 {
             eprintln!("error: {e}");
             EXIT_ERROR
         }
+    }
+}
+
+/// The first signal sets `interrupted` (the run stops before its next step); the second
+/// exits at once.
+fn stop_on_signals(interrupted: Arc<AtomicBool>, say: impl Fn(&str) + Send + 'static) {
+    let handler = move || {
+        if interrupted.swap(true, Ordering::SeqCst) {
+            say("interrupted again: exiting now, without summary.json");
+            std::process::exit(EXIT_FAILED_RUN);
+        }
+        say("interrupted: stopping after the current step and writing summary.json (interrupt again to exit now)");
+    };
+    if let Err(e) = ctrlc::set_handler(handler) {
+        eprintln!("warning: Ctrl-C will kill the run without summary.json: {e}");
     }
 }

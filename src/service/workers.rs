@@ -6,11 +6,15 @@
 //! Cancellation and shutdown reach a run through its [`Observer`], which the engine polls
 //! once per time step: `DELETE` sets the job's cancel flag (the job ends `cancelled`); a
 //! shutdown past its grace period sets the pool's interrupt flag (the job ends `failed`
-//! with reason `interrupted`, exactly as if the process had died).
+//! with reason `interrupted`, exactly as if the process had died). The decision is the
+//! observer's ([`Observer::stop_reason`]), so the job's summary.json says the same as its
+//! record.
 
 use super::store::{ClaimedJob, JobStatus, JobStore};
 use super::Config;
 use crate::case::{parse_case_str, CaseError, ValidCase};
+use crate::engine::SimError;
+use crate::math::Real;
 use crate::run::{run_case, Observer, Progress, RunError, RunStatus};
 use std::collections::HashMap;
 use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering};
@@ -137,6 +141,20 @@ impl Observer for JobObserver {
     fn is_cancelled(&self) -> bool {
         self.cancel.load(Ordering::Relaxed) || self.interrupt.load(Ordering::Relaxed)
     }
+
+    /// A user's DELETE: `cancelled`. Otherwise the service's shutdown stopped the run:
+    /// `failed` / `interrupted`, the contract for a job the service gave up on (as after a
+    /// crash), in summary.json as in the record.
+    fn stop_reason(&self, step: u64, time: Real) -> (RunStatus, String) {
+        if self.cancel.load(Ordering::SeqCst) {
+            (
+                RunStatus::Cancelled,
+                SimError::Cancelled { step, time }.to_string(),
+            )
+        } else {
+            (RunStatus::Failed, INTERRUPTED.to_string())
+        }
+    }
 }
 
 /// Claim and run one job. `EmptyQueue` when nothing is waiting (or the pool is stopping).
@@ -158,12 +176,11 @@ pub async fn try_execute_job(jobs: &Arc<Jobs>) -> Result<ExecutionOutcome, sqlx:
 
 async fn execute(jobs: &Arc<Jobs>, job: ClaimedJob) -> Result<JobStatus, sqlx::Error> {
     let id = job.row.id;
-    let cancel = jobs.cancel_flag(id);
     let observer = JobObserver {
         id,
         store: jobs.store.clone(),
         runtime: tokio::runtime::Handle::current(),
-        cancel: cancel.clone(),
+        cancel: jobs.cancel_flag(id),
         interrupt: jobs.interrupt.clone(),
         last_write: Instant::now(),
     };
@@ -181,14 +198,14 @@ async fn execute(jobs: &Arc<Jobs>, job: ClaimedJob) -> Result<JobStatus, sqlx::E
 
     let (status, reason, summary, steps, time) = match outcome {
         Ok(Ok(Ok(summary))) => {
+            // the observer decided cancelled (a DELETE) or failed / interrupted (shutdown)
             let (status, reason) = match summary.status {
                 RunStatus::Succeeded => (JobStatus::Succeeded, None),
                 RunStatus::Failed => (JobStatus::Failed, summary.reason.clone()),
-                RunStatus::Cancelled if cancel.load(Ordering::SeqCst) => (
+                RunStatus::Cancelled => (
                     JobStatus::Cancelled,
                     Some("cancelled by request".to_string()),
                 ),
-                RunStatus::Cancelled => (JobStatus::Failed, Some(INTERRUPTED.to_string())),
             };
             let text = serde_json::to_string(&summary).ok();
             (status, reason, text, summary.steps, summary.simulated_time)

@@ -138,10 +138,22 @@ async fn a_graceful_shutdown_interrupts_running_jobs_and_keeps_queued_ones() {
         started.elapsed()
     );
 
-    let app = spawn_app_on(data, |c| c.workers = 1).await;
+    let app = spawn_app_on(data.clone(), |c| c.workers = 1).await;
     let job = app.job(&running).await;
     assert_eq!(job["status"], "failed", "{job:#}");
     assert_eq!(job["reason"], "interrupted");
+    // the run's own summary.json, as served and on disk, says the same as the record
+    assert_eq!(job["summary"]["status"], "failed", "{job:#}");
+    assert_eq!(job["summary"]["reason"], "interrupted", "{job:#}");
+    let path = data.join("jobs").join(&running).join("summary.json");
+    let on_disk: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(&path).expect("summary.json")).unwrap();
+    assert_eq!(on_disk["status"], "failed", "{on_disk:#}");
+    assert_eq!(on_disk["reason"], "interrupted", "{on_disk:#}");
+    assert!(
+        on_disk["simulated_time"].as_f64().unwrap() > 0.0,
+        "{on_disk:#}"
+    );
     assert_eq!(app.wait_finished(&waiting).await["status"], "succeeded");
     app.stop().await;
 }

@@ -4,7 +4,8 @@ use mpsfsi::case::load_case_file;
 use mpsfsi::engine::params::MpsParameters;
 use mpsfsi::engine::scene::build_scene;
 use std::path::{Path, PathBuf};
-use std::process::{Command, Output};
+use std::process::{Child, Command, Output, Stdio};
+use std::time::{Duration, Instant};
 
 fn mpsfsi(args: &[&str]) -> Output {
     Command::new(env!("CARGO_BIN_EXE_mpsfsi"))
@@ -236,5 +237,110 @@ fn serve_and_bench_parse_their_flags() {
         "--max-body-bytes",
     ] {
         assert!(help.contains(flag), "{flag} missing: {help}");
+    }
+}
+
+/// Kills the child if the test fails before it exits.
+struct KillOnDrop(Child);
+
+impl Drop for KillOnDrop {
+    fn drop(&mut self) {
+        let _ = self.0.kill();
+        let _ = self.0.wait();
+    }
+}
+
+fn data_rows(path: &Path) -> usize {
+    std::fs::read_to_string(path).map_or(0, |t| t.lines().count().saturating_sub(1))
+}
+
+/// Ctrl-C (SIGINT) or SIGTERM in the middle of a run that would go on for minutes: the
+/// run ends after its current step, exit code 1, summary.json `cancelled` with the
+/// signal in its reason, and every output kept up to the time it reached.
+#[cfg(all(target_os = "linux", target_env = "gnu"))]
+#[test]
+fn a_signal_ends_the_run_with_its_outputs_and_a_cancelled_summary() {
+    let case = load_case_file(&tiny(), &[]).unwrap();
+    let interval = case.output.load_interval.unwrap();
+    let end = 1000.0; // over 10^6 steps at max_dt
+    for (signal, name) in [(libc::SIGINT, "SIGINT"), (libc::SIGTERM, "SIGTERM")] {
+        let dir = scratch(&format!("signal-{name}"));
+        let child = Command::new(env!("CARGO_BIN_EXE_mpsfsi"))
+            .args([
+                "run",
+                tiny().to_str().unwrap(),
+                "--out",
+                dir.to_str().unwrap(),
+            ])
+            .args(["--set", &format!("time.end={end}")])
+            .args(["--set", "output.snapshot_interval=0.05"])
+            .stdout(Stdio::null())
+            .stderr(Stdio::piped())
+            .spawn()
+            .expect("mpsfsi runs");
+        let mut child = KillOnDrop(child);
+        let started = Instant::now();
+        while data_rows(&dir.join("loads.csv")) < 5 {
+            assert!(
+                child.0.try_wait().unwrap().is_none(),
+                "{name}: the run ended before the signal"
+            );
+            assert!(
+                started.elapsed() < Duration::from_secs(60),
+                "{name}: no loads after a minute"
+            );
+            std::thread::sleep(Duration::from_millis(20));
+        }
+        let pid = child.0.id() as libc::pid_t;
+        // SAFETY: kill(2) on our own child, which has not been waited for (still running)
+        assert_eq!(unsafe { libc::kill(pid, signal) }, 0, "{name}: kill");
+        let signalled = Instant::now();
+        let status = loop {
+            if let Some(status) = child.0.try_wait().unwrap() {
+                break status;
+            }
+            assert!(
+                signalled.elapsed() < Duration::from_secs(60),
+                "{name}: still running a minute after the signal"
+            );
+            std::thread::sleep(Duration::from_millis(20));
+        };
+        let mut stderr = String::new();
+        std::io::Read::read_to_string(child.0.stderr.as_mut().unwrap(), &mut stderr).unwrap();
+        assert_eq!(status.code(), Some(1), "{name}: {stderr}");
+        assert!(
+            stderr.contains("interrupted") && stderr.contains("error: run cancelled:"),
+            "{name}: {stderr}"
+        );
+
+        let summary: serde_json::Value = serde_json::from_str(
+            &std::fs::read_to_string(dir.join("summary.json")).expect("summary.json"),
+        )
+        .unwrap();
+        assert_eq!(summary["status"], "cancelled", "{name}: {summary}");
+        let reason = summary["reason"].as_str().unwrap_or_default();
+        assert!(
+            reason.contains("interrupted") && reason.contains(name),
+            "{name}: {reason}"
+        );
+        let t = summary["simulated_time"].as_f64().unwrap();
+        assert!(t > 0.0 && t < end, "{name}: {summary}");
+        assert!(summary["steps"].as_u64().unwrap() > 0, "{name}: {summary}");
+
+        // the loads up to the last whole sample interval before t
+        let loads = std::fs::read_to_string(dir.join("loads.csv")).unwrap();
+        let last: f64 = loads
+            .lines()
+            .last()
+            .and_then(|l| l.split(',').next())
+            .and_then(|v| v.parse().ok())
+            .expect("a last data row");
+        assert!(
+            last <= t + 1e-9 && t - last <= 2.0 * interval,
+            "{name}: last load at {last} s, summary at {t} s"
+        );
+        for file in ["loads_filtered.csv", "probes.csv", "snapshots/run.pvd"] {
+            assert!(dir.join(file).exists(), "{name}: {file} missing");
+        }
     }
 }
