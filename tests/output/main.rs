@@ -4,6 +4,7 @@
 mod bench_measures;
 mod bench_scaling;
 mod filter;
+mod flow;
 mod plot;
 mod vtk;
 
