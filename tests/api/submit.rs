@@ -119,6 +119,37 @@ async fn submitted_case_succeeds_and_serves_the_same_files_as_run_case() {
     std::fs::write(&loads_path, partial).unwrap();
     assert_eq!(app.get_svg(&format!("/v1/jobs/{id}/loads.svg")).await, svg);
 
+    // The flow picture is output::flow::flow_svg of the snapshot nearest the time asked.
+    let svg = app
+        .get_svg(&format!(
+            "/v1/jobs/{id}/snapshot.svg?time=0.002&field=velocity_y"
+        ))
+        .await;
+    let dir = app.data_dir.join("jobs").join(&id);
+    let snapshot = mpsfsi::output::flow::read_snapshot(&dir, Some(0.002)).unwrap();
+    let title = mpsfsi::output::flow::title(case["name"].as_str().unwrap(), &snapshot);
+    let (direct, _) = mpsfsi::output::flow::flow_svg(
+        &snapshot,
+        mpsfsi::output::flow::FlowField::VelocityY,
+        None,
+        &title,
+    )
+    .unwrap();
+    assert_eq!(svg, direct);
+    for (query, code) in [
+        ("field=vorticity", "bad_request"),
+        ("window=1,0,0,1", "bad_request"),
+        ("time=abc", "bad_request"),
+    ] {
+        let (status, body) = app
+            .get_json(&format!("/v1/jobs/{id}/snapshot.svg?{query}"))
+            .await;
+        assert_eq!(
+            (status, body["error"]["code"].as_str()),
+            (400, Some(code)),
+            "{query}: {body}"
+        );
+    }
     // The run directory keeps the case as submitted.
     let saved = std::fs::read(app.data_dir.join("jobs").join(&id).join("case.json")).unwrap();
     assert_eq!(saved, serde_json::to_vec(&case).unwrap());
@@ -174,5 +205,21 @@ async fn listing_pages_newest_first() {
         .collect();
     let newest_first: Vec<String> = ids.iter().rev().cloned().collect();
     assert_eq!(listed, newest_first);
+    app.stop().await;
+}
+
+#[tokio::test]
+async fn a_job_without_snapshots_answers_404_for_its_flow_picture() {
+    let app = spawn_app("no-snapshots", |_| {}).await;
+    let mut quiet = tiny_case(0.002);
+    quiet["output"]["snapshot_interval"] = serde_json::json!("none");
+    let quiet_id = app.submit(&quiet).await;
+    assert_eq!(app.wait_finished(&quiet_id).await["status"], "succeeded");
+    let (status, body) = app
+        .get_json(&format!("/v1/jobs/{quiet_id}/snapshot.svg"))
+        .await;
+    assert_eq!(status, 404);
+    assert_eq!(body["error"]["code"], "no_snapshots");
+    assert_conforms("GET", "/v1/jobs/{id}/snapshot.svg", 404, &body);
     app.stop().await;
 }

@@ -344,3 +344,68 @@ fn a_signal_ends_the_run_with_its_outputs_and_a_cancelled_summary() {
         }
     }
 }
+
+#[test]
+fn plot_draws_a_snapshot_of_a_run_and_refuses_what_it_cannot_draw() {
+    let dir = scratch("plot");
+    let run = mpsfsi(&[
+        "run",
+        tiny().to_str().unwrap(),
+        "--out",
+        dir.to_str().unwrap(),
+    ]);
+    assert!(run.status.success(), "{}", text(&run.stderr));
+    let svg = dir.join("flow.svg");
+    let out = mpsfsi(&[
+        "plot",
+        dir.to_str().unwrap(),
+        "--time",
+        "0.005",
+        "--field",
+        "speed",
+        "--window",
+        "-0.01,0.11,-0.01,0.08",
+        "--out",
+        svg.to_str().unwrap(),
+    ]);
+    assert!(out.status.success(), "{}", text(&out.stderr));
+    let picture = std::fs::read_to_string(&svg).unwrap();
+    // 50 particles, the tank's three walls, a colour bar labelled by the field
+    assert!(picture.matches("<rect").count() > 50, "particle marks");
+    assert!(picture.contains("stroke-width=\"2\""), "the tank's walls");
+    assert!(picture.contains("speed (m/s)"));
+    // the tiny tank's snapshots are at k * 1 ms: 0.005 s picks the one at 5 ms
+    assert!(
+        text(&out.stdout).starts_with("t = 0.005"),
+        "{}",
+        text(&out.stdout)
+    );
+
+    let bad_field = mpsfsi(&[
+        "plot",
+        dir.to_str().unwrap(),
+        "--field",
+        "vorticity",
+        "--out",
+        "x.svg",
+    ]);
+    assert_eq!(bad_field.status.code(), Some(2));
+    assert!(text(&bad_field.stderr).contains("expected one of pressure, speed"));
+    let bad_window = mpsfsi(&[
+        "plot",
+        dir.to_str().unwrap(),
+        "--window",
+        "1,0,0,1",
+        "--out",
+        "x.svg",
+    ]);
+    assert_eq!(bad_window.status.code(), Some(2));
+    let empty = scratch("plot-empty");
+    let none = mpsfsi(&["plot", empty.to_str().unwrap(), "--out", "x.svg"]);
+    assert_eq!(none.status.code(), Some(3));
+    assert!(
+        text(&none.stderr).contains("has no snapshots"),
+        "{}",
+        text(&none.stderr)
+    );
+}
