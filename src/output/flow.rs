@@ -186,7 +186,7 @@ fn field_values(s: &Snapshot, field: FlowField) -> Result<(Vec<Real>, String), P
                     let q = 0.5 * rho * v * v;
                     (
                         pressure.iter().map(|x| x / q).collect(),
-                        format!("Cp = p / (½ρV²), V = {v:.3} m/s"),
+                        format!("Cp = p / (½ρV²), V = {v:.3} m/s, ½ρV² = {:.4} kPa", q / 1e3),
                     )
                 }
                 _ => (pressure.to_vec(), "pressure (Pa)".into()),

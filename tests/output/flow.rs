@@ -3,7 +3,7 @@
 //! third-party reader (meshio) opening the walls' files.
 
 use crate::scratch_dir;
-use mpsfsi::case::{parse_case_value, Limits, ValidCase};
+use mpsfsi::case::{load_case_file, parse_case_value, Limits, Motion, ValidCase};
 use mpsfsi::output::flow::{
     flow_svg, read_snapshot, snapshot_times, FlowField, BAR_STEPS, BODY_COLOUR,
 };
@@ -163,33 +163,28 @@ fn rects(svg: &str) -> Vec<(f64, f64, f64, String)> {
         .collect()
 }
 
-#[test]
-fn the_flow_picture_shows_the_particles_a_colour_bar_and_the_body_at_its_pose() {
-    let dir = scratch_dir("flow-picture");
-    run(box_entry(json!({ "load_interval": 0.001 })), &dir);
-    let s = read_snapshot(&dir, Some(0.03)).unwrap();
-    let nearest = snapshot_times(&dir)
-        .unwrap()
-        .into_iter()
-        .min_by(|a, b| (a - 0.03).abs().total_cmp(&(b - 0.03).abs()))
-        .unwrap();
-    assert_eq!(s.time, nearest, "the snapshot nearest 0.03 s");
-    let window = [0.05, 0.35, -0.02, 0.2];
-    let (svg, frame) = flow_svg(&s, FlowField::Pressure, Some(window), "box").unwrap();
-    assert!(svg.starts_with("<svg") || svg.contains("<svg"));
+/// The picture `flow_svg` draws of `snapshot` over `window` has: the body's edges within
+/// 1.5 px of where `vertex(k)` puts its corners, one mark per particle in the window, one
+/// spacing wide, coloured by the field, and the colour bar right of the plot.
+fn check_picture(
+    s: &mpsfsi::output::flow::Snapshot,
+    window: [f64; 4],
+    corners: &[[f64; 2]],
+    spacing: f64,
+) {
+    let (svg, frame) = flow_svg(s, FlowField::Pressure, Some(window), "picture").unwrap();
+    assert!(svg.contains("<svg"));
     // the pressure is shown as Cp because a body moves
     assert!(svg.contains("Cp = p"), "a Cp colour bar label");
 
-    // the body: its four edges, each within 1.5 px of where x0 + V t puts them
     let colour = format!(
         "#{:02X}{:02X}{:02X}",
         BODY_COLOUR.0, BODY_COLOUR.1, BODY_COLOUR.2
     );
     let edges = polylines(&svg, &colour, 3);
-    assert_eq!(edges.len(), 4, "one polyline per body edge");
-    for k in 0..4 {
-        let [x, y] = vertex_at(k, s.time);
-        let (px, py) = frame.to_pixel(x, y);
+    assert_eq!(edges.len(), corners.len(), "one polyline per body edge");
+    for (k, [x, y]) in corners.iter().enumerate() {
+        let (px, py) = frame.to_pixel(*x, *y);
         let near = edges
             .iter()
             .flatten()
@@ -197,8 +192,6 @@ fn the_flow_picture_shows_the_particles_a_colour_bar_and_the_body_at_its_pose() 
         assert!(near, "vertex {k} at pixel ({px:.1}, {py:.1}): {edges:?}");
     }
 
-    // the particles: one mark each inside the window; the colour bar: BAR_STEPS marks
-    // right of the plot
     let inside = s
         .particles
         .points
@@ -210,38 +203,92 @@ fn the_flow_picture_shows_the_particles_a_colour_bar_and_the_body_at_its_pose() 
     let marks = rects(&svg);
     let right = frame.pixels.2 as f64;
     let bar = marks.iter().filter(|r| r.0 > right + 1.0).count();
-    let particles = marks
+    let particles: Vec<_> = marks
         .iter()
         .filter(|r| r.0 <= right + 1.0 && r.3 != "#FFFFFF")
-        .count();
+        .collect();
     assert_eq!(bar, BAR_STEPS, "the colour bar");
-    assert_eq!(particles, inside, "one mark per particle in the window");
-    let colours: std::collections::BTreeSet<&str> = marks.iter().map(|r| r.3.as_str()).collect();
+    assert_eq!(
+        particles.len(),
+        inside,
+        "one mark per particle in the window"
+    );
+    let colours: std::collections::BTreeSet<&str> =
+        particles.iter().map(|r| r.3.as_str()).collect();
     assert!(
         colours.len() > 20,
         "particles coloured by pressure: {} colours",
         colours.len()
     );
-    // the marks are one spacing (plus the half-pixel overlap) wide
+    // one spacing (plus the half-pixel overlap) wide; the median, as plotters clips the
+    // marks at the window's edges
     let px_per_m = (frame.pixels.2 - frame.pixels.0) as f64 / (window[1] - window[0]);
-    // (the median: plotters clips the marks at the window's edges)
-    let mut widths: Vec<f64> = marks
-        .iter()
-        .filter(|r| r.0 <= right + 1.0 && r.3 != "#FFFFFF")
-        .map(|r| r.2)
-        .collect();
+    let mut widths: Vec<f64> = particles.iter().map(|r| r.2).collect();
     widths.sort_by(f64::total_cmp);
     let width = widths[widths.len() / 2];
     assert!(
-        (width - 0.01 * px_per_m).abs() <= 2.0,
+        (width - spacing * px_per_m).abs() <= 2.0,
         "mark width {width} px"
     );
+}
+
+#[test]
+fn the_flow_picture_shows_the_particles_a_colour_bar_and_the_body_at_its_pose() {
+    let dir = scratch_dir("flow-picture");
+    run(box_entry(json!({ "load_interval": 0.001 })), &dir);
+    let s = read_snapshot(&dir, Some(0.03)).unwrap();
+    let nearest = snapshot_times(&dir)
+        .unwrap()
+        .into_iter()
+        .min_by(|a, b| (a - 0.03).abs().total_cmp(&(b - 0.03).abs()))
+        .unwrap();
+    assert_eq!(s.time, nearest, "the snapshot nearest 0.03 s");
+    let corners: Vec<[f64; 2]> = (0..4).map(|k| vertex_at(k, s.time)).collect();
+    check_picture(&s, [0.05, 0.35, -0.02, 0.2], &corners, 0.01);
 
     for field in [FlowField::Speed, FlowField::VelocityX, FlowField::VelocityY] {
         let (svg, _) = flow_svg(&s, field, None, "box").unwrap();
-        assert_eq!(polylines(&svg, &colour, 3).len(), 4);
+        assert!(svg.contains("(m/s)"));
     }
     assert!(flow_svg(&s, FlowField::Pressure, Some([1.0, 0.0, 0.0, 1.0]), "box").is_err());
+}
+
+/// The shipped 30° wedge (at 2 cm, to 6 ms): the wedge drawn where its prescribed
+/// velocity has taken it.
+#[test]
+fn the_shipped_wedge_is_drawn_in_place() {
+    let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("cases/wedge_30deg_constant_velocity.json");
+    let overrides = [
+        "particle_spacing=0.02".to_string(),
+        "time.end=0.006".to_string(),
+    ];
+    let case = load_case_file(&path, &overrides).unwrap();
+    let body = case.bodies[0].clone();
+    let Motion::Prescribed { velocity, .. } = body.motion else {
+        panic!("the shipped wedge has a prescribed motion")
+    };
+    let dir = scratch_dir("flow-wedge");
+    let case = ValidCase::new(case, &Limits::default()).unwrap();
+    let summary = run_case(&case, &dir, &mut Quiet).unwrap();
+    assert_eq!(summary.status, RunStatus::Succeeded);
+    let s = read_snapshot(&dir, None).unwrap();
+    assert!(
+        (s.time - 0.006).abs() < 1e-9,
+        "the last snapshot is at the end"
+    );
+    // the polygon's body frame is placed at `position` with angle 0
+    let corners: Vec<[f64; 2]> = body
+        .polygon
+        .iter()
+        .map(|p| {
+            [
+                p[0] + body.position[0] + velocity[0] * s.time,
+                p[1] + body.position[1] + velocity[1] * s.time,
+            ]
+        })
+        .collect();
+    check_picture(&s, [-0.6, 0.6, -0.5, 0.4], &corners, 0.02);
 }
 
 /// meshio (PyPI), a reader no one here wrote, opens a walls file and finds the box at its
