@@ -252,6 +252,41 @@ fn default_window(s: &Snapshot) -> [Real; 4] {
     [b[0] - pad, b[1] + pad, b[2] - pad, b[3] + pad]
 }
 
+/// The part of the segment a-b inside `window` ([x0, x1, y0, y1]), Liang–Barsky.
+fn clip_segment(
+    a: (Real, Real),
+    b: (Real, Real),
+    [x0, x1, y0, y1]: [Real; 4],
+) -> Option<((Real, Real), (Real, Real))> {
+    let (dx, dy) = (b.0 - a.0, b.1 - a.1);
+    let (mut t0, mut t1) = (0.0 as Real, 1.0 as Real);
+    for (p, q) in [
+        (-dx, a.0 - x0),
+        (dx, x1 - a.0),
+        (-dy, a.1 - y0),
+        (dy, y1 - a.1),
+    ] {
+        if p == 0.0 {
+            if q < 0.0 {
+                return None;
+            }
+        } else {
+            let t = q / p;
+            if p < 0.0 {
+                t0 = t0.max(t);
+            } else {
+                t1 = t1.min(t);
+            }
+        }
+    }
+    (t0 <= t1).then(|| {
+        (
+            (a.0 + t0 * dx, a.1 + t0 * dy),
+            (a.0 + t1 * dx, a.1 + t1 * dy),
+        )
+    })
+}
+
 /// The picture of `snapshot` coloured by `field` over `window` ([x0, x1, y0, y1] in
 /// metres; None: everything), and where its plot sits.
 pub fn flow_svg(
@@ -330,14 +365,16 @@ pub fn flow_svg(
                 } else {
                     WALL_COLOUR.stroke_width(2)
                 };
-                let path: Vec<(Real, Real)> = w
-                    .cell(k)
-                    .iter()
-                    .map(|&i| (w.points[i][0], w.points[i][1]))
-                    .collect();
-                chart
-                    .draw_series(std::iter::once(PathElement::new(path, style)))
-                    .map_err(drawing)?;
+                let cell = w.cell(k);
+                for pair in cell.windows(2) {
+                    let [a, b] = [pair[0], pair[1]].map(|i| (w.points[i][0], w.points[i][1]));
+                    // plotters would pin a point outside the window to its edge
+                    if let Some((a, b)) = clip_segment(a, b, [x0, x1, y0, y1]) {
+                        chart
+                            .draw_series(std::iter::once(PathElement::new(vec![a, b], style)))
+                            .map_err(drawing)?;
+                    }
+                }
             }
         }
         let (xs, ys) = chart.plotting_area().get_pixel_range();
