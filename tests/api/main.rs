@@ -7,6 +7,7 @@ mod cancel;
 mod contract;
 mod helpers;
 mod limits;
+mod page;
 mod restart;
 mod schema;
 mod submit;
