@@ -69,10 +69,12 @@ pub struct Case {
     pub reference: Option<Reference>,
     pub fluid: Fluid,
     /// Initial particle spacing l0 (m). Every length in `scheme` is a ratio of it.
+    #[schemars(extend("exclusiveMinimum" = 0))]
     pub particle_spacing: f64,
     /// Particles leaving this box are removed and counted.
     pub domain: Domain,
     /// Polygons filled with fluid particles on a square lattice of `particle_spacing`.
+    #[schemars(extend("minItems" = 1))]
     pub fluid_blocks: Vec<FluidBlock>,
     /// Fixed walls (open or closed polylines).
     #[serde(default)]
@@ -109,9 +111,11 @@ pub struct Reference {
 pub struct Fluid {
     /// kg/m³
     #[serde(default = "default_density")]
+    #[schemars(extend("exclusiveMinimum" = 0))]
     pub density: f64,
     /// m²/s; zero switches the viscous stage off.
     #[serde(default = "default_viscosity")]
+    #[schemars(range(min = 0))]
     pub kinematic_viscosity: f64,
     /// m/s²
     #[serde(default = "default_gravity")]
@@ -149,6 +153,7 @@ pub struct Domain {
 #[serde(deny_unknown_fields)]
 pub struct FluidBlock {
     /// Closed polygon (either orientation), vertices in metres.
+    #[schemars(extend("minItems" = 3, "maxItems" = 10_000))]
     pub polygon: Vec<Point>,
     /// Initial velocity of the block's particles (m/s).
     #[serde(default)]
@@ -170,8 +175,10 @@ pub enum FluidSide {
 #[serde(deny_unknown_fields)]
 pub struct Wall {
     /// Name used in `loads.csv`.
+    #[schemars(extend("pattern" = r#"^[^,"\r\n]*[^\s,"][^,"\r\n]*$"#))]
     pub name: String,
     /// Vertices of the polyline (m).
+    #[schemars(extend("minItems" = 2, "maxItems" = 10_000))]
     pub polyline: Vec<Point>,
     /// Join the last vertex to the first.
     #[serde(default)]
@@ -201,8 +208,10 @@ pub enum WallSlip {
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize, JsonSchema)]
 #[serde(deny_unknown_fields)]
 pub struct Body {
+    #[schemars(extend("pattern" = r#"^[^,"\r\n]*[^\s,"][^,"\r\n]*$"#))]
     pub name: String,
     /// Closed polygon in the body frame, counter-clockwise (m).
+    #[schemars(extend("minItems" = 3, "maxItems" = 10_000))]
     pub polygon: Vec<Point>,
     /// World position of the body-frame origin (m).
     #[serde(default)]
@@ -227,14 +236,17 @@ pub enum Motion {
         angular_velocity: f64,
         /// Velocity time table, linearly interpolated, held constant outside.
         #[serde(default, skip_serializing_if = "Option::is_none")]
+        #[schemars(extend("minItems" = 1))]
         table: Option<Vec<VelocitySample>>,
     },
     /// Dynamic: moved by gravity, fluid force and contacts.
     Free {
         /// kg per metre of span.
+        #[schemars(extend("exclusiveMinimum" = 0))]
         mass: f64,
         /// kg·m²/m about the centre of mass; from the polygon with uniform density if absent.
         #[serde(default, skip_serializing_if = "Option::is_none")]
+        #[schemars(extend("exclusiveMinimum" = 0))]
         inertia: Option<f64>,
         #[serde(default)]
         velocity: Point,
@@ -267,14 +279,17 @@ pub enum Dof {
 #[serde(deny_unknown_fields)]
 pub struct TimeControl {
     /// Simulated end time (s).
+    #[schemars(extend("exclusiveMinimum" = 0))]
     pub end: f64,
     /// Courant number: dt <= cfl * l0 / u_max, also with each particle's last
     /// acceleration, and a step in which a particle would move more than 1.5 cfl
     /// spacings is repeated shorter (the jet root of an impact; summary `steps_repeated`).
     #[serde(default = "default_cfl")]
+    #[schemars(extend("exclusiveMinimum" = 0))]
     pub cfl: f64,
     /// Upper bound on the time step (s).
     #[serde(default = "default_max_dt")]
+    #[schemars(extend("exclusiveMinimum" = 0))]
     pub max_dt: f64,
 }
 
@@ -298,6 +313,7 @@ pub struct DampingZone {
     /// Outer edge (full damping from there on), m.
     pub end: Point,
     /// Damping rate at the outer edge, 1/s.
+    #[schemars(range(min = 0))]
     pub strength: f64,
 }
 
@@ -306,6 +322,7 @@ pub struct DampingZone {
 pub struct Output {
     /// Interval between rows of loads.csv, bodies.csv and probes.csv (s); null: every step.
     #[serde(default = "default_load_interval")]
+    #[schemars(extend("exclusiveMinimum" = 0))]
     pub load_interval: Option<f64>,
     /// Interval between VTK snapshots (s); absent or "auto": ten over the run; "none" or
     /// null: none.
@@ -315,6 +332,7 @@ pub struct Output {
     pub probes: Vec<Probe>,
     /// Width of the zero-phase moving-average filter applied to loads (s); null: automatic.
     #[serde(default)]
+    #[schemars(extend("exclusiveMinimum" = 0))]
     pub filter_window: Option<f64>,
     /// Also write `energy.csv`: the fluid's kinetic and potential energy (J/m) at each
     /// load sample (the standing-wave benchmark measures its decay from it).
@@ -429,6 +447,7 @@ impl Default for Output {
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize, JsonSchema)]
 #[serde(deny_unknown_fields)]
 pub struct Probe {
+    #[schemars(extend("pattern" = r#"^[^,"\r\n]*[^\s,"][^,"\r\n]*$"#))]
     pub name: String,
     pub position: Point,
 }

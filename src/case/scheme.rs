@@ -228,28 +228,37 @@ pub struct Scheme {
     pub source: SourceKind,
     pub solver: SolverKind,
     /// Relative residual at which the linear solver stops.
+    #[schemars(extend("exclusiveMinimum" = 0))]
     pub solver_tolerance: f64,
+    #[schemars(range(min = 1))]
     pub solver_max_iterations: usize,
     /// pcg_amg only: steps one AMG hierarchy preconditions before it is rebuilt (1:
     /// rebuilt every step). In between, the hierarchy of an earlier step is fitted to
     /// the new matrix (engine::pressure::reuse); it is rebuilt sooner when the
     /// iterations grow by half. The solution keeps the solver tolerance either way.
+    #[schemars(range(min = 1))]
     pub amg_rebuild_interval: usize,
     /// Influence radius r_e/l0 of PND, gradient and source. 2.5: the slamming force
     /// converges to the similarity solution with refinement (30° wedge: -3.6 % at 4 mm,
     /// -0.3 % at 2.5 mm), where 2.1 rises above it (+5.2 % at 5 mm, +11.5 % at 2.5 mm).
+    #[schemars(extend("exclusiveMinimum" = 1))]
     pub radius: f64,
     /// Influence radius r_e/l0 of the Laplacian; null: `radius` (3.1 for the classic Laplacian).
+    #[schemars(extend("exclusiveMinimum" = 1))]
     pub laplacian_radius: Option<f64>,
     /// Free surface when n* < threshold * n0 (beta).
+    #[schemars(range(max = 1), extend("exclusiveMinimum" = 0))]
     pub surface_threshold: f64,
     /// Free surface only if the neighbour distribution is also one-sided: |sum w r_ij| / sum w > this * l0.
     /// Zero disables the check.
+    #[schemars(range(min = 0))]
     pub surface_asymmetry: f64,
     /// Weight of the minimum-pressure repulsion (p_i - p̂_i) Σ r w / r² added to the
     /// corrected gradient: 0 is pure GC, 1 makes it the classic gradient's stabilising part.
+    #[schemars(range(min = 0))]
     pub gradient_stabilization: f64,
     /// Pairs closer than this (ratio of l0) feel the stabilising repulsion.
+    #[schemars(range(min = 0))]
     pub stabilization_distance: f64,
     /// Clip negative pressures to zero after the solve.
     pub clip_negative_pressure: bool,
@@ -268,21 +277,28 @@ pub struct Scheme {
     /// CFL 0.1. `cases/dam_break.json` sets 0.3.
     /// Not the default: it also lowers the pressure of the thin layers under a jet root
     /// (the wedge at 1 cm: C_F 11.97 instead of 15.61).
+    #[schemars(range(max = 1), extend("exclusiveMinimum" = 0))]
     pub laplacian_fill_floor: f64,
     /// Relaxation gamma of the PND term in the mixed source.
+    #[schemars(range(min = 0))]
     pub mixed_relaxation: f64,
     /// Quasi-compressibility alpha_c (1/Pa) added to the PPE diagonal as -rho alpha_c / dt^2.
+    #[schemars(range(min = 0))]
     pub compressibility: f64,
     pub spacing_control: SpacingControl,
     /// Pair distance below which the collision acts (ratio of l0).
+    #[schemars(range(min = 0))]
     pub collision_distance: f64,
     /// Restitution coefficient of the collision.
+    #[schemars(range(min = 0, max = 1))]
     pub collision_restitution: f64,
     /// Distance from a wall below which the repulsion safety net acts (ratio of l0).
+    #[schemars(range(min = 0))]
     pub wall_repulsion_distance: f64,
     /// Particle shifting coefficient A (Fickian, Lind et al. 2012): each step moves a
     /// particle by -A l0² ∇n/n0 (wall lattice included), tangentially only next to the
     /// free surface; 0 disables it.
+    #[schemars(range(min = 0, max = 0.5))]
     pub shifting: f64,
     /// Fill the part of each Laplacian neighbourhood that is missing (free surface,
     /// disorder) with ghosts carrying the hydrostatic pressure p_i + rho g·r, so still
@@ -294,6 +310,7 @@ pub struct Scheme {
     /// The default 0.01 keeps a still tank still for 20 s (load -0.0005 %; without it a
     /// mode seeded by round-off lifts the load by 3 % at 11 s) and moves the dam-break
     /// front by under 0.7 %.
+    #[schemars(range(min = 0, max = 0.5))]
     pub velocity_filter: f64,
     /// Form of the viscous term (only evaluated when the kinematic viscosity is positive).
     pub viscosity: ViscosityKind,
@@ -302,6 +319,7 @@ pub struct Scheme {
     /// How the pressure solve makes the fluid follow a wall's normal motion.
     pub wall_kinematics: WallKinematics,
     /// A run fails when a particle exceeds this speed (m/s); null: automatic from the scene.
+    #[schemars(extend("exclusiveMinimum" = 0))]
     pub max_speed: Option<f64>,
     /// Share of the initial particles that may be removed, one by one, for exceeding
     /// `max_speed` before the run fails (counted in the summary's `particles_runaway`,

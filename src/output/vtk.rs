@@ -119,7 +119,12 @@ fn push_geometry(
     cells: usize,
 ) {
     out.push_str("      <Points>\n");
-    push_array(out, "position", 3, points.iter().flat_map(|p| [p.x, p.y, 0.0]));
+    push_array(
+        out,
+        "position",
+        3,
+        points.iter().flat_map(|p| [p.x, p.y, 0.0]),
+    );
     out.push_str("      </Points>\n");
     out.push_str("      <Cells>\n");
     push_scalars(out, "connectivity", connectivity.map(|i| i as i64));

@@ -19,6 +19,9 @@ pub enum ApiError {
     QueueFull { capacity: usize, retry_after_s: u64 },
     #[error("the request is invalid: {0}")]
     BadRequest(String),
+    /// A query parameter outside what the contract allows (`path`: its name).
+    #[error("the request is invalid: {path}: {message}")]
+    BadParameter { path: &'static str, message: String },
     #[error("no job with id {0}")]
     JobNotFound(String),
     #[error("job {id} has already finished ({status})")]
@@ -42,7 +45,9 @@ impl ApiError {
 
     pub fn status(&self) -> StatusCode {
         match self {
-            Self::MalformedJson(_) | Self::BadRequest(_) => StatusCode::BAD_REQUEST,
+            Self::MalformedJson(_) | Self::BadRequest(_) | Self::BadParameter { .. } => {
+                StatusCode::BAD_REQUEST
+            }
             Self::InvalidCase(_) => StatusCode::UNPROCESSABLE_ENTITY,
             Self::PayloadTooLarge { .. } => StatusCode::PAYLOAD_TOO_LARGE,
             Self::QueueFull { .. } | Self::ShuttingDown => StatusCode::SERVICE_UNAVAILABLE,
@@ -62,7 +67,7 @@ impl ApiError {
             Self::InvalidCase(_) => "invalid_case",
             Self::PayloadTooLarge { .. } => "payload_too_large",
             Self::QueueFull { .. } => "queue_full",
-            Self::BadRequest(_) => "bad_request",
+            Self::BadRequest(_) | Self::BadParameter { .. } => "bad_request",
             Self::JobNotFound(_) => "job_not_found",
             Self::AlreadyFinished { .. } => "job_finished",
             Self::NoSnapshots(_) => "no_snapshots",
@@ -96,6 +101,7 @@ impl IntoResponse for ApiError {
         }
         let path = match &self {
             Self::InvalidCase(e) => serde_json::Value::String(e.path.clone()),
+            Self::BadParameter { path, .. } => serde_json::Value::String(path.to_string()),
             _ => serde_json::Value::Null,
         };
         let body = serde_json::json!({

@@ -21,6 +21,7 @@
 //! (its partial files are kept and still served); a job found `queued` is run again.
 
 pub mod config;
+pub mod contract;
 pub mod error;
 pub mod page;
 pub mod routes;

@@ -241,11 +241,12 @@ async fn list_jobs(
 ) -> Result<Json<Value>, ApiError> {
     let Query(query) = query.map_err(|e| ApiError::BadRequest(e.body_text()))?;
     let status = match query.status.as_deref() {
-        None | Some("") => None,
-        Some(s) => Some(JobStatus::parse(s).ok_or_else(|| {
-            ApiError::BadRequest(format!(
+        None => None,
+        Some(s) => Some(JobStatus::parse(s).ok_or_else(|| ApiError::BadParameter {
+            path: "status",
+            message: format!(
                 "unknown status {s:?} (expected queued, running, succeeded, failed or cancelled)"
-            ))
+            ),
         })?),
     };
     let limit = query.limit.unwrap_or(50);

@@ -29,7 +29,7 @@ pub enum ServeError {
         addr: String,
         source: std::io::Error,
     },
-    #[error("api/openapi.yaml is not valid YAML: {0}")]
+    #[error("the OpenAPI document: {0}")]
     OpenApi(String),
     #[error("the server stopped with an error: {0}")]
     Serve(std::io::Error),
@@ -61,8 +61,7 @@ impl App {
             path: jobs_dir.display().to_string(),
             source,
         })?;
-        let openapi: serde_json::Value = serde_norway::from_str(super::OPENAPI_YAML)
-            .map_err(|e| ServeError::OpenApi(e.to_string()))?;
+        let openapi = super::contract::openapi_document().map_err(ServeError::OpenApi)?;
         let store = JobStore::open(&config.database_url()).await?;
         let interrupted = store.recover_interrupted().await?;
         if interrupted > 0 {

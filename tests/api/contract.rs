@@ -127,3 +127,103 @@ async fn the_server_answers_every_documented_route_and_no_other() {
     }
     app.stop().await;
 }
+
+/// The served document carries the whole case schema: the shipped cases conform to it,
+/// and a case the old placeholder accepted (empty objects, a zero spacing, null blocks)
+/// does not, at each of the fields the server would reject.
+#[test]
+fn the_served_contract_carries_the_full_case_schema() {
+    let case_schema = serde_json::json!({ "$ref": "#/components/schemas/Case" });
+    let cases = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("cases");
+    let mut shipped = 0;
+    for entry in std::fs::read_dir(cases).unwrap() {
+        let path = entry.unwrap().path();
+        if path.extension().is_some_and(|e| e == "json") {
+            let case: Value =
+                serde_json::from_str(&std::fs::read_to_string(&path).unwrap()).unwrap();
+            let errors = check(&OPENAPI, &case_schema, &case, "$");
+            assert!(errors.is_empty(), "{}: {errors:#?}", path.display());
+            shipped += 1;
+        }
+    }
+    assert!(shipped >= 5);
+    let stub = serde_json::json!({
+        "domain": {}, "fluid": {}, "fluid_blocks": [null, null], "name": "",
+        "particle_spacing": 0, "time": {}
+    });
+    let errors = check(&OPENAPI, &case_schema, &stub, "$").join("\n");
+    for expected in [
+        "$.domain: missing required \"min\"",
+        "$.particle_spacing: 0 <= exclusive minimum 0",
+        "$.time: missing required \"end\"",
+        "$.fluid_blocks",
+    ] {
+        assert!(errors.contains(expected), "{expected} not in:\n{errors}");
+    }
+    // and the server agrees with the contract on each of them
+    let parsed = mpsfsi::case::parse_case_value(stub);
+    assert!(parsed.is_err());
+    // every positive quantity carries its bound
+    for (schema, field, keyword) in [
+        ("Case", "particle_spacing", "exclusiveMinimum"),
+        ("Fluid", "density", "exclusiveMinimum"),
+        ("Fluid", "kinematic_viscosity", "minimum"),
+        ("TimeControl", "end", "exclusiveMinimum"),
+        ("TimeControl", "cfl", "exclusiveMinimum"),
+        ("TimeControl", "max_dt", "exclusiveMinimum"),
+        ("Output", "load_interval", "exclusiveMinimum"),
+    ] {
+        let property = &OPENAPI["components"]["schemas"][schema]["properties"][field];
+        assert!(
+            property.get(keyword).is_some(),
+            "{schema}.{field}: {property}"
+        );
+    }
+    let motion = serde_json::to_string(&OPENAPI["components"]["schemas"]["Motion"]).unwrap();
+    assert!(
+        motion.contains("exclusiveMinimum"),
+        "the free body's mass: {motion}"
+    );
+}
+
+/// `POST /v1/jobs` links to every operation that takes a job id, with the id from its
+/// response body.
+#[test]
+fn submitting_links_to_every_route_of_a_job() {
+    let links = OPENAPI["paths"]["/v1/jobs"]["post"]["responses"]["201"]["links"]
+        .as_object()
+        .expect("links on the 201 response");
+    let mut with_id = BTreeSet::new();
+    for (path, item) in OPENAPI["paths"].as_object().unwrap() {
+        if path.contains("{id}") {
+            for (method, operation) in item.as_object().unwrap() {
+                if METHODS.contains(&method.as_str()) {
+                    with_id.insert(operation["operationId"].as_str().unwrap().to_string());
+                }
+            }
+        }
+    }
+    let linked: BTreeSet<String> = links
+        .values()
+        .map(|l| {
+            assert_eq!(l["parameters"]["id"], "$response.body#/id");
+            l["operationId"].as_str().unwrap().to_string()
+        })
+        .collect();
+    assert_eq!(linked, with_id);
+}
+
+#[tokio::test]
+async fn the_status_filter_rejects_values_outside_its_enum() {
+    let app = spawn_app("status-filter", |_| {}).await;
+    for value in ["", "done", "SUCCEEDED"] {
+        let (status, body) = app.get_json(&format!("/v1/jobs?status={value}")).await;
+        assert_eq!(status, 400, "{value:?}: {body}");
+        assert_eq!(body["error"]["code"], "bad_request");
+        assert_eq!(body["error"]["path"], "status");
+        assert_conforms("GET", "/v1/jobs", 400, &body);
+    }
+    let (status, _) = app.get_json("/v1/jobs?status=queued").await;
+    assert_eq!(status, 200);
+    app.stop().await;
+}

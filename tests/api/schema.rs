@@ -1,16 +1,16 @@
-//! The contract in `api/openapi.yaml`, and a small JSON Schema checker for the keywords
-//! that file uses (`$ref`, `type`, `enum`, `required`, `properties`,
-//! `additionalProperties`, `items`, `oneOf`, `minimum`, `maximum`; `format` and
+//! The served contract (`api/openapi.yaml` with the case schema), and a small JSON
+//! Schema checker for the keywords it uses (`$ref`, `type`, `enum`, `const`, `required`,
+//! `properties`, `additionalProperties`, `items`, `minItems`, `maxItems`, `oneOf`,
+//! `anyOf`, `minimum`, `maximum`, `exclusiveMinimum`, `pattern`; `format` and
 //! annotations are ignored). An unknown keyword fails the check, so the file cannot
 //! drift into schema features this checker would silently skip.
 
 use serde_json::Value;
 use std::sync::LazyLock;
 
+/// The document the server serves: api/openapi.yaml with the full case schema.
 pub static OPENAPI: LazyLock<Value> = LazyLock::new(|| {
-    let text =
-        std::fs::read_to_string(concat!(env!("CARGO_MANIFEST_DIR"), "/api/openapi.yaml")).unwrap();
-    serde_norway::from_str(&text).expect("api/openapi.yaml parses")
+    mpsfsi::service::contract::openapi_document().expect("the served contract builds")
 });
 
 const KNOWN: &[&str] = &[
@@ -22,9 +22,16 @@ const KNOWN: &[&str] = &[
     "additionalProperties",
     "items",
     "oneOf",
+    "anyOf",
+    "const",
     "minimum",
     "maximum",
+    "exclusiveMinimum",
+    "minItems",
+    "maxItems",
+    "pattern",
     "format",
+    "title",
     "description",
     "default",
     "example",
@@ -90,6 +97,46 @@ pub fn check(doc: &Value, schema: &Value, value: &Value, at: &str) -> Vec<String
     if let (Some(max), Some(v)) = (s.get("maximum").and_then(Value::as_f64), value.as_f64()) {
         if v > max {
             errors.push(format!("{at}: {v} > maximum {max}"));
+        }
+    }
+    if let Some(c) = s.get("const") {
+        if c != value {
+            errors.push(format!("{at}: {value} is not {c}"));
+        }
+    }
+    if let (Some(min), Some(v)) = (
+        s.get("exclusiveMinimum").and_then(Value::as_f64),
+        value.as_f64(),
+    ) {
+        if v <= min {
+            errors.push(format!("{at}: {v} <= exclusive minimum {min}"));
+        }
+    }
+    if let (Some(pattern), Some(text)) = (s.get("pattern").and_then(Value::as_str), value.as_str())
+    {
+        let re = regex::Regex::new(pattern).unwrap_or_else(|e| panic!("pattern at {at}: {e}"));
+        if !re.is_match(text) {
+            errors.push(format!("{at}: {text:?} does not match {pattern}"));
+        }
+    }
+    if let Value::Array(items) = value {
+        let n = items.len() as u64;
+        if s.get("minItems")
+            .and_then(Value::as_u64)
+            .is_some_and(|m| n < m)
+        {
+            errors.push(format!("{at}: {n} items, fewer than minItems"));
+        }
+        if s.get("maxItems")
+            .and_then(Value::as_u64)
+            .is_some_and(|m| n > m)
+        {
+            errors.push(format!("{at}: {n} items, more than maxItems"));
+        }
+    }
+    if let Some(Value::Array(options)) = s.get("anyOf") {
+        if !options.iter().any(|o| check(doc, o, value, at).is_empty()) {
+            errors.push(format!("{at}: {value} matches none of the anyOf options"));
         }
     }
     if let Some(Value::Array(options)) = s.get("oneOf") {
