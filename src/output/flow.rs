@@ -418,18 +418,36 @@ pub fn title(name: &str, snapshot: &Snapshot) -> String {
     format!("{name}: t = {:.3} ms", snapshot.time * 1e3)
 }
 
-/// A window `X0,X1,Y0,Y1` in metres (`--window`, the `window` query parameter).
+/// Pattern of a window (the `window` query parameter's in the contract): four numbers of
+/// at most a million metres, comma separated.
+pub const WINDOW_PATTERN: &str =
+    r"^ *-?[0-9]{1,6}(\.[0-9]{1,9})? *(, *-?[0-9]{1,6}(\.[0-9]{1,9})? *){3}$";
+
+/// A window `X0,X1,Y0,Y1` in metres (`--window`, the `window` query parameter): the
+/// corners in either order; a side of zero width is widened to the other side's width
+/// (1 m when both are zero), so any four numbers draw something.
 pub fn parse_window(text: &str) -> Result<[f64; 4], String> {
     let values: Vec<f64> = text
         .split(',')
         .map(|v| v.trim().parse::<f64>().map_err(|e| format!("{v:?}: {e}")))
         .collect::<Result<_, _>>()?;
-    match values[..] {
-        [x0, x1, y0, y1] if x1 > x0 && y1 > y0 && values.iter().all(|v| v.is_finite()) => {
-            Ok([x0, x1, y0, y1])
-        }
-        _ => Err(format!(
-            "{text:?}: expected X0,X1,Y0,Y1 in metres with X1 > X0 and Y1 > Y0"
-        )),
+    let [a, b, c, d] = values[..] else {
+        return Err(format!(
+            "{text:?}: expected four numbers X0,X1,Y0,Y1 in metres"
+        ));
+    };
+    if !values.iter().all(|v| v.is_finite()) {
+        return Err(format!("{text:?}: the corners must be finite"));
     }
+    let (mut x0, mut x1, mut y0, mut y1) = (a.min(b), a.max(b), c.min(d), c.max(d));
+    let fallback = |other: f64| if other > 0.0 { other } else { 1.0 };
+    if x1 == x0 {
+        let w = 0.5 * fallback(y1 - y0);
+        (x0, x1) = (x0 - w, x1 + w);
+    }
+    if y1 == y0 {
+        let h = 0.5 * fallback(x1 - x0);
+        (y0, y1) = (y0 - h, y1 + h);
+    }
+    Ok([x0, x1, y0, y1])
 }

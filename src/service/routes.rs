@@ -233,6 +233,8 @@ struct ListQuery {
 }
 
 const MAX_PAGE: i64 = 1000;
+/// Largest `offset` of the job list (the contract's bound: an offset is an i64 here).
+const MAX_OFFSET: i64 = 1_000_000_000;
 
 #[tracing::instrument(name = "list jobs", skip_all)]
 async fn list_jobs(
@@ -251,10 +253,17 @@ async fn list_jobs(
     };
     let limit = query.limit.unwrap_or(50);
     let offset = query.offset.unwrap_or(0);
-    if !(1..=MAX_PAGE).contains(&limit) || offset < 0 {
-        return Err(ApiError::BadRequest(format!(
-            "limit must be 1..={MAX_PAGE} and offset >= 0"
-        )));
+    if !(1..=MAX_PAGE).contains(&limit) {
+        return Err(ApiError::BadParameter {
+            path: "limit",
+            message: format!("must be 1..={MAX_PAGE} (got {limit})"),
+        });
+    }
+    if !(0..=MAX_OFFSET).contains(&offset) {
+        return Err(ApiError::BadParameter {
+            path: "offset",
+            message: format!("must be 0..={MAX_OFFSET} (got {offset})"),
+        });
     }
     let (rows, total) = state.jobs.store.list(status, limit, offset).await?;
     let jobs: Vec<Value> = rows.iter().map(job_json).collect();

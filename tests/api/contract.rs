@@ -227,3 +227,15 @@ async fn the_status_filter_rejects_values_outside_its_enum() {
     assert_eq!(status, 200);
     app.stop().await;
 }
+
+#[test]
+fn the_window_parameter_has_the_pattern_the_server_parses() {
+    let parameters = OPENAPI["paths"]["/v1/jobs/{id}/snapshot.svg"]["get"]["parameters"]
+        .as_array()
+        .unwrap();
+    let window = parameters.iter().find(|p| p["name"] == "window").unwrap();
+    assert_eq!(
+        window["schema"]["pattern"],
+        mpsfsi::output::flow::WINDOW_PATTERN
+    );
+}

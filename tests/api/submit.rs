@@ -138,7 +138,7 @@ async fn submitted_case_succeeds_and_serves_the_same_files_as_run_case() {
     assert_eq!(svg, direct);
     for (query, code) in [
         ("field=vorticity", "bad_request"),
-        ("window=1,0,0,1", "bad_request"),
+        ("window=1,0,zero,1", "bad_request"),
         ("time=abc", "bad_request"),
     ] {
         let (status, body) = app

@@ -395,7 +395,7 @@ fn plot_draws_a_snapshot_of_a_run_and_refuses_what_it_cannot_draw() {
         "plot",
         dir.to_str().unwrap(),
         "--window",
-        "1,0,0,1",
+        "1,0,zero,1",
         "--out",
         "x.svg",
     ]);

@@ -354,3 +354,23 @@ print(json.dumps({"line_blocks": len(lines), "body_points": out}))
         );
     }
 }
+
+#[test]
+fn a_window_takes_its_corners_in_any_order_and_never_draws_nothing() {
+    use mpsfsi::output::flow::{parse_window, WINDOW_PATTERN};
+    assert_eq!(parse_window("1,0,0,2").unwrap(), [0.0, 1.0, 0.0, 2.0]);
+    assert_eq!(
+        parse_window(" -1, 1 ,3,-3").unwrap(),
+        [-1.0, 1.0, -3.0, 3.0]
+    );
+    assert_eq!(parse_window("0,0,0,2").unwrap(), [-1.0, 1.0, 0.0, 2.0]);
+    assert_eq!(parse_window("0,0,0,0").unwrap(), [-0.5, 0.5, -0.5, 0.5]);
+    for bad in ["1,2,3", "a,b,c,d", "1,2,3,inf", ""] {
+        assert!(parse_window(bad).is_err(), "{bad:?}");
+    }
+    // what the contract's pattern admits, parse_window accepts
+    let re = regex::Regex::new(WINDOW_PATTERN).unwrap();
+    for ok in ["0,0,0,0", "-999999.123456789,1,2,3", " 1 , -2,3 ,4 "] {
+        assert!(re.is_match(ok) && parse_window(ok).is_ok(), "{ok:?}");
+    }
+}
