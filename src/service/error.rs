@@ -19,6 +19,8 @@ pub enum ApiError {
     QueueFull { capacity: usize, retry_after_s: u64 },
     #[error("the request is invalid: {0}")]
     BadRequest(String),
+    #[error("{0}")]
+    Unauthorized(&'static str),
     #[error("no job with id {0}")]
     JobNotFound(String),
     #[error("job {id} has already finished ({status})")]
@@ -49,6 +51,7 @@ impl ApiError {
             Self::JobNotFound(_) | Self::RouteNotFound(_) | Self::NoSnapshots(_) => {
                 StatusCode::NOT_FOUND
             }
+            Self::Unauthorized(_) => StatusCode::UNAUTHORIZED,
             Self::AlreadyFinished { .. } => StatusCode::CONFLICT,
             Self::MethodNotAllowed => StatusCode::METHOD_NOT_ALLOWED,
             Self::Internal(_) => StatusCode::INTERNAL_SERVER_ERROR,
@@ -63,6 +66,7 @@ impl ApiError {
             Self::PayloadTooLarge { .. } => "payload_too_large",
             Self::QueueFull { .. } => "queue_full",
             Self::BadRequest(_) => "bad_request",
+            Self::Unauthorized(_) => "unauthorized",
             Self::JobNotFound(_) => "job_not_found",
             Self::AlreadyFinished { .. } => "job_finished",
             Self::NoSnapshots(_) => "no_snapshots",
