@@ -1,11 +1,13 @@
 //! Typed service configuration: every field is a `serve` flag and an `MPSFSI_*`
 //! environment variable (flags win). `mpsfsi serve` flattens [`Config`] into its
-//! arguments; tests build one with [`Config::for_tests`].
+//! arguments; tests build one with [`Config::for_tests`]. The one exception is the
+//! bearer token itself: `MPSFSI_TOKEN` only, never a flag (it would show in `ps`).
 
 use crate::case::Limits;
 use std::net::SocketAddr;
 use std::path::PathBuf;
 use std::time::Duration;
+use subtle::ConstantTimeEq;
 
 #[derive(Debug, Clone, clap::Args)]
 pub struct Config {
@@ -31,6 +33,47 @@ pub struct Config {
     /// recorded `failed` with reason `interrupted`; queued jobs stay queued).
     #[arg(long, env = "MPSFSI_SHUTDOWN_GRACE_S", default_value_t = 10.0)]
     pub shutdown_grace_s: f64,
+    /// File holding the bearer token clients must send (`Authorization: Bearer <token>`);
+    /// or put the token itself in MPSFSI_TOKEN. Required when --addr is not loopback.
+    #[arg(long, env = "MPSFSI_TOKEN_FILE", value_name = "PATH")]
+    pub token_file: Option<PathBuf>,
+    /// The token from MPSFSI_TOKEN (see [`super::auth`]).
+    #[arg(skip = Token::from_env())]
+    pub token: Option<Token>,
+}
+
+/// A bearer token. Its `Debug` prints `<redacted>`, so a logged or printed [`Config`]
+/// never shows it; [`Token::matches`] compares in constant time.
+#[derive(Clone)]
+pub struct Token(String);
+
+impl Token {
+    pub const ENV: &'static str = "MPSFSI_TOKEN";
+
+    pub fn new(token: impl Into<String>) -> Self {
+        Self(token.into())
+    }
+
+    /// `MPSFSI_TOKEN`, when set.
+    pub fn from_env() -> Option<Self> {
+        std::env::var_os(Self::ENV).map(|v| Self(v.to_string_lossy().into_owned()))
+    }
+
+    pub(super) fn as_str(&self) -> &str {
+        &self.0
+    }
+
+    /// Whether `presented` is this token, in a time that does not depend on where they
+    /// differ (`subtle`; a length mismatch answers at once: the length is no secret).
+    pub fn matches(&self, presented: &[u8]) -> bool {
+        self.0.as_bytes().ct_eq(presented).into()
+    }
+}
+
+impl std::fmt::Debug for Token {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str("<redacted>")
+    }
 }
 
 impl Config {
@@ -44,6 +87,8 @@ impl Config {
             max_particles: 500_000,
             max_body_bytes: 1 << 20,
             shutdown_grace_s: 0.0,
+            token_file: None,
+            token: None,
         }
     }
 

@@ -22,6 +22,8 @@ pub enum ApiError {
     /// A query parameter outside what the contract allows (`path`: its name).
     #[error("the request is invalid: {path}: {message}")]
     BadParameter { path: &'static str, message: String },
+    #[error("{0}")]
+    Unauthorized(&'static str),
     #[error("no job with id {0}")]
     JobNotFound(String),
     #[error("job {id} has already finished ({status})")]
@@ -54,6 +56,7 @@ impl ApiError {
             Self::JobNotFound(_) | Self::RouteNotFound(_) | Self::NoSnapshots(_) => {
                 StatusCode::NOT_FOUND
             }
+            Self::Unauthorized(_) => StatusCode::UNAUTHORIZED,
             Self::AlreadyFinished { .. } => StatusCode::CONFLICT,
             Self::MethodNotAllowed => StatusCode::METHOD_NOT_ALLOWED,
             Self::Internal(_) => StatusCode::INTERNAL_SERVER_ERROR,
@@ -68,6 +71,7 @@ impl ApiError {
             Self::PayloadTooLarge { .. } => "payload_too_large",
             Self::QueueFull { .. } => "queue_full",
             Self::BadRequest(_) | Self::BadParameter { .. } => "bad_request",
+            Self::Unauthorized(_) => "unauthorized",
             Self::JobNotFound(_) => "job_not_found",
             Self::AlreadyFinished { .. } => "job_finished",
             Self::NoSnapshots(_) => "no_snapshots",

@@ -7,6 +7,7 @@
 //! - [`startup`]: [`App::build`] binds the listener (port 0 in tests), [`serve`] runs
 //!   until SIGTERM / Ctrl-C and shuts down gracefully.
 //! - [`routes`]: the HTTP handlers; [`error`]: the one [`ApiError`].
+//! - [`auth`]: the bearer token, required beyond loopback (all routes but the health).
 //! - [`store`]: the job table. The table *is* the queue: a job is admitted by an insert
 //!   that checks the number of queued jobs in the same statement, and a worker claims the
 //!   oldest queued job with one `UPDATE ... RETURNING`, so a job is never lost between a
@@ -20,6 +21,7 @@
 //! the death of the previous process and is marked `failed` with reason `interrupted`
 //! (its partial files are kept and still served); a job found `queued` is run again.
 
+pub mod auth;
 pub mod config;
 pub mod contract;
 pub mod error;
@@ -30,7 +32,7 @@ pub mod startup;
 pub mod store;
 pub mod workers;
 
-pub use config::Config;
+pub use config::{Config, Token};
 pub use error::ApiError;
 pub use startup::{serve, App, ServeError, ShutdownHandle};
 

@@ -1,4 +1,5 @@
-//! Startup and shutdown. [`App::build`] opens the data directory and database, recovers
+//! Startup and shutdown. [`App::build`] resolves the access token ([`super::auth`]:
+//! required beyond loopback), opens the data directory and database, recovers
 //! jobs a previous process left behind, and binds the listener (port 0 in tests; the real
 //! port is [`App::port`]). [`App::run_until_stopped`] serves and runs the workers until
 //! SIGTERM, Ctrl-C or a [`ShutdownHandle`], then shuts down in order: stop accepting and
@@ -6,6 +7,8 @@
 //! interrupt the rest at their next step (recorded `failed` / `interrupted`); close the
 //! database. Queued jobs stay queued and run after the next start.
 
+use super::auth::{self, AccessError};
+use super::config::Token;
 use super::routes::{router, AppState};
 use super::store::JobStore;
 use super::workers::{run_worker_until_stopped, Jobs};
@@ -17,6 +20,8 @@ use tokio::sync::watch;
 
 #[derive(Debug, thiserror::Error)]
 pub enum ServeError {
+    #[error(transparent)]
+    Access(#[from] AccessError),
     #[error("cannot create the data directory {path}: {source}")]
     DataDir {
         path: String,
@@ -51,11 +56,13 @@ pub struct App {
     listener: TcpListener,
     jobs: Arc<Jobs>,
     state: AppState,
+    token: Option<Token>,
     shutdown: watch::Sender<bool>,
 }
 
 impl App {
     pub async fn build(config: Config) -> Result<App, ServeError> {
+        let token = auth::resolve_token(&config)?;
         let jobs_dir = config.data_dir.join("jobs");
         std::fs::create_dir_all(&jobs_dir).map_err(|source| ServeError::DataDir {
             path: jobs_dir.display().to_string(),
@@ -88,6 +95,7 @@ impl App {
             listener,
             jobs,
             state,
+            token,
             shutdown,
         })
     }
@@ -106,6 +114,7 @@ impl App {
             listener,
             jobs,
             state,
+            token,
             shutdown,
             ..
         } = self;
@@ -122,7 +131,7 @@ impl App {
                 _ = stop.wait_for(|v| *v) => tracing::info!("shutdown requested"),
             }
         };
-        let app = router(state, config.max_body_bytes)
+        let app = auth::require_token(router(state, config.max_body_bytes), token)
             .layer(tower_http::trace::TraceLayer::new_for_http());
         let served = axum::serve(listener, app)
             .with_graceful_shutdown(signal)
@@ -183,6 +192,7 @@ pub async fn serve(config: Config) -> Result<(), ServeError> {
         addr = %format!("{}:{}", config.addr.ip(), app.port()),
         data = %config.data_dir.display(),
         workers = config.workers,
+        token = config.token.is_some() || config.token_file.is_some(),
         "mpsfsi service listening"
     );
     app.run_until_stopped().await

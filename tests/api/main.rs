@@ -1,6 +1,7 @@
 //! API tests: the service spawned in-process on 127.0.0.1:0 (and as a child process for
 //! the kill-and-restart test), each with its own data directory.
 
+mod auth;
 mod bad_input;
 mod burst;
 mod cancel;

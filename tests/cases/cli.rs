@@ -235,6 +235,8 @@ fn serve_and_bench_parse_their_flags() {
         "--queue-capacity",
         "--max-particles",
         "--max-body-bytes",
+        "--token-file",
+        "MPSFSI_TOKEN",
     ] {
         assert!(help.contains(flag), "{flag} missing: {help}");
     }
