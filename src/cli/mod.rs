@@ -62,7 +62,8 @@ pub enum Command {
         /// pressure (Cp when a body moves), speed, velocity_x or velocity_y.
         #[arg(long, default_value = "pressure")]
         field: String,
-        /// Region to draw, `X0,X1,Y0,Y1` in metres (default: everything).
+        /// Region to draw, `X0,X1,Y0,Y1` in metres (default: one body size around the
+        /// moving bodies, or everything without one).
         #[arg(long, allow_hyphen_values = true)]
         window: Option<String>,
         /// SVG file to write.

@@ -228,16 +228,15 @@ fn colour_range(values: &[Real]) -> (Real, Real) {
     }
 }
 
-/// Bounds of the particles and the walls, padded by 2 %.
-fn default_window(s: &Snapshot) -> [Real; 4] {
+/// Bounds of `points`, or None when there are none.
+fn bounds<'a>(points: impl Iterator<Item = &'a [Real; 3]>) -> Option<[Real; 4]> {
     let mut b = [
         Real::INFINITY,
         Real::NEG_INFINITY,
         Real::INFINITY,
         Real::NEG_INFINITY,
     ];
-    let grids = std::iter::once(&s.particles).chain(s.walls.as_ref());
-    for p in grids.flat_map(|g| g.points.iter()) {
+    for p in points {
         b = [
             b[0].min(p[0]),
             b[1].max(p[0]),
@@ -245,11 +244,39 @@ fn default_window(s: &Snapshot) -> [Real; 4] {
             b[3].max(p[1]),
         ];
     }
-    if !b.iter().all(|v| v.is_finite()) {
+    b.iter().all(|v| v.is_finite()).then_some(b)
+}
+
+/// The default window: around the moving bodies, one body size beyond them on every
+/// side (where the load is decided), within the bounds of everything; without a moving
+/// body, everything. Padded by 2 %.
+fn default_window(s: &Snapshot) -> [Real; 4] {
+    let everything = std::iter::once(&s.particles).chain(s.walls.as_ref());
+    let Some(all) = bounds(everything.flat_map(|g| g.points.iter())) else {
         return [0.0, 1.0, 0.0, 1.0];
-    }
-    let pad = 0.02 * (b[1] - b[0]).max(b[3] - b[2]).max(1e-9);
-    [b[0] - pad, b[1] + pad, b[2] - pad, b[3] + pad]
+    };
+    let bodies = s.walls.as_ref().and_then(|w| {
+        let moving = w.cell_scalar("moving")?;
+        bounds(
+            (0..w.cells)
+                .filter(|&k| moving[k] > 0.5)
+                .flat_map(|k| w.cell(k).iter().map(|&i| &w.points[i])),
+        )
+    });
+    let [x0, x1, y0, y1] = match bodies {
+        Some([bx0, bx1, by0, by1]) => {
+            let size = (bx1 - bx0).max(by1 - by0);
+            [
+                (bx0 - size).max(all[0]),
+                (bx1 + size).min(all[1]),
+                (by0 - size).max(all[2]),
+                (by1 + size).min(all[3]),
+            ]
+        }
+        None => all,
+    };
+    let pad = 0.02 * (x1 - x0).max(y1 - y0).max(1e-9);
+    [x0 - pad, x1 + pad, y0 - pad, y1 + pad]
 }
 
 /// The part of the segment a-b inside `window` ([x0, x1, y0, y1]), Liang–Barsky.
@@ -288,7 +315,8 @@ fn clip_segment(
 }
 
 /// The picture of `snapshot` coloured by `field` over `window` ([x0, x1, y0, y1] in
-/// metres; None: everything), and where its plot sits.
+/// metres; None: around the moving bodies, or everything without one), and where its
+/// plot sits.
 pub fn flow_svg(
     snapshot: &Snapshot,
     field: FlowField,

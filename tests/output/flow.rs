@@ -289,6 +289,15 @@ fn the_shipped_wedge_is_drawn_in_place() {
         })
         .collect();
     check_picture(&s, [-0.6, 0.6, -0.5, 0.4], &corners, 0.02);
+
+    // by default the picture is of the wedge and one breadth of water around it, not of
+    // the 4 m tank: three breadths wide (B = 0.5 m) plus 2 % on each side
+    let (_, frame) = flow_svg(&s, FlowField::Pressure, None, "wedge").unwrap();
+    let pad = 0.02 * 1.5;
+    assert!((frame.x.0 - (-0.75 - pad)).abs() < 1e-9 && (frame.x.1 - (0.75 + pad)).abs() < 1e-9);
+    for [x, y] in &corners {
+        assert!(frame.x.0 < *x && *x < frame.x.1 && frame.y.0 < *y && *y < frame.y.1);
+    }
 }
 
 /// meshio (PyPI), a reader no one here wrote, opens a walls file and finds the box at its
