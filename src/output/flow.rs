@@ -279,6 +279,18 @@ fn default_window(s: &Snapshot) -> [Real; 4] {
     [x0 - pad, x1 + pad, y0 - pad, y1 + pad]
 }
 
+/// An axis label to 0.1 mm, without trailing zeros (plotters' own prints the zero tick
+/// of a symmetric window as "-0.0").
+fn tick(v: &Real) -> String {
+    let text = format!("{v:.4}");
+    let text = text.trim_end_matches('0').trim_end_matches('.');
+    if text == "-0" {
+        "0".into()
+    } else {
+        text.into()
+    }
+}
+
 /// The part of the segment a-b inside `window` ([x0, x1, y0, y1]), Liang–Barsky.
 fn clip_segment(
     a: (Real, Real),
@@ -352,6 +364,8 @@ pub fn flow_svg(
             .configure_mesh()
             .disable_mesh()
             .label_style(("sans-serif", 18))
+            .x_label_formatter(&tick)
+            .y_label_formatter(&tick)
             .x_desc("x (m)")
             .y_desc("y (m)")
             .draw()
