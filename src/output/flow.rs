@@ -318,12 +318,10 @@ fn clip_segment(
             }
         }
     }
-    (t0 <= t1).then(|| {
-        (
-            (a.0 + t0 * dx, a.1 + t0 * dy),
-            (a.0 + t1 * dx, a.1 + t1 * dy),
-        )
-    })
+    (t0 <= t1).then_some((
+        (a.0 + t0 * dx, a.1 + t0 * dy),
+        (a.0 + t1 * dx, a.1 + t1 * dy),
+    ))
 }
 
 /// The picture of `snapshot` coloured by `field` over `window` ([x0, x1, y0, y1] in
@@ -336,7 +334,7 @@ pub fn flow_svg(
     title: &str,
 ) -> Result<(String, Frame), PlotError> {
     let [x0, x1, y0, y1] = window.unwrap_or_else(|| default_window(snapshot));
-    if !(x1 > x0 && y1 > y0) || ![x0, x1, y0, y1].iter().all(|v| v.is_finite()) {
+    if !(x1 > x0 && y1 > y0 && [x0, x1, y0, y1].iter().all(|v| v.is_finite())) {
         return Err(PlotError::Data(format!(
             "the window [{x0}, {x1}] x [{y0}, {y1}] is empty"
         )));
