@@ -11,12 +11,12 @@ pub fn plot(
     window: Option<&str>,
     out: &Path,
 ) -> i32 {
-    let Some(field) = FlowField::parse(field) else {
-        eprintln!(
-            "error: --field {field:?}: expected one of {}",
-            FlowField::NAMES.join(", ")
-        );
-        return EXIT_REJECTED;
+    let field = match FlowField::parse(field) {
+        Ok(field) => field,
+        Err(e) => {
+            eprintln!("error: --field {e}");
+            return EXIT_REJECTED;
+        }
     };
     let window = match window.map(parse_window).transpose() {
         Ok(w) => w,

@@ -27,13 +27,19 @@ pub enum FlowField {
 impl FlowField {
     pub const NAMES: [&'static str; 4] = ["pressure", "speed", "velocity_x", "velocity_y"];
 
-    pub fn parse(name: &str) -> Option<Self> {
-        Some(match name {
+    /// The field named `name`, or the message naming the valid ones.
+    pub fn parse(name: &str) -> Result<Self, String> {
+        Ok(match name {
             "pressure" => Self::Pressure,
             "speed" => Self::Speed,
             "velocity_x" => Self::VelocityX,
             "velocity_y" => Self::VelocityY,
-            _ => return None,
+            _ => {
+                return Err(format!(
+                    "{name:?}: expected one of {}",
+                    Self::NAMES.join(", ")
+                ))
+            }
         })
     }
 }

@@ -87,25 +87,21 @@ impl SnapshotWriter {
         };
         let file = snapshot_file_name(sim.steps);
         write_atomically(&self.dir.join(&file), &vtu_string(&fields, sim.time))?;
-        let placed: Vec<_> = sim
+        let outlines: Vec<Outline> = sim
             .walls
             .iter()
-            .map(|w| w.shape.transformed(w.state.position, w.state.angle).surface)
-            .collect();
-        let velocity: Vec<_> = sim
-            .walls
-            .iter()
-            .map(|w| move |x| w.state.point_velocity(x))
-            .collect();
-        let outlines: Vec<Outline<'_>> = sim
-            .walls
-            .iter()
-            .enumerate()
-            .map(|(k, w)| Outline {
-                segments: &placed[k],
-                moving: w.body.is_some(),
-                velocity: &velocity[k],
-                speed: w.state.velocity.norm(),
+            .map(|w| {
+                let segments = w.shape.transformed(w.state.position, w.state.angle).surface;
+                let velocities = segments
+                    .iter()
+                    .map(|ends| ends.map(|x| w.state.point_velocity(x)))
+                    .collect();
+                Outline {
+                    segments,
+                    velocities,
+                    moving: w.body.is_some(),
+                    speed: w.state.velocity.norm(),
+                }
             })
             .collect();
         let walls = walls_file_name(sim.steps);

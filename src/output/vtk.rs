@@ -28,13 +28,13 @@ pub struct VtuFields<'a> {
 }
 
 /// The surface of one wall or body at its pose, for the walls grid.
-pub struct Outline<'a> {
+pub struct Outline {
     /// Segments facing the fluid, world frame.
-    pub segments: &'a [[Vec2; 2]],
+    pub segments: Vec<[Vec2; 2]>,
+    /// Velocity of each segment's end points (rigid motion), one pair per segment.
+    pub velocities: Vec<[Vec2; 2]>,
     /// A body (moving or free) rather than a fixed wall.
     pub moving: bool,
-    /// Velocity of each segment end point (rigid motion), in segment order.
-    pub velocity: &'a dyn Fn(Vec2) -> Vec2,
     /// Speed of the object's centre of mass (m/s).
     pub speed: Real,
 }
@@ -194,14 +194,14 @@ pub fn vtu_string(fields: &VtuFields<'_>, time: Real) -> String {
 /// its pose. Cell data: `object` (the outline's index, the order of loads.csv's names),
 /// `moving` (1 for a body) and `speed` (its centre of mass's, m/s); point data:
 /// `velocity` of the material point.
-pub fn walls_vtu_string(outlines: &[Outline<'_>], time: Real) -> String {
+pub fn walls_vtu_string(outlines: &[Outline], time: Real) -> String {
     let mut points = Vec::new();
-    let mut velocity = Vec::new();
+    let mut velocity: Vec<Vec2> = Vec::new();
     let (mut object, mut moving, mut speed) = (Vec::new(), Vec::new(), Vec::new());
     for (k, o) in outlines.iter().enumerate() {
-        for [a, b] in o.segments {
-            points.extend([*a, *b]);
-            velocity.extend([(o.velocity)(*a), (o.velocity)(*b)]);
+        for (segment, ends) in o.segments.iter().zip(&o.velocities) {
+            points.extend(segment);
+            velocity.extend(ends);
             object.push(k);
             moving.push(u8::from(o.moving));
             speed.push(o.speed);

@@ -425,12 +425,9 @@ async fn get_snapshot_svg(
     let Query(query) = query.map_err(|e| ApiError::BadRequest(e.body_text()))?;
     let field = match query.field.as_deref() {
         None => FlowField::Pressure,
-        Some(name) => FlowField::parse(name).ok_or_else(|| {
-            ApiError::BadRequest(format!(
-                "field {name:?}: expected one of {}",
-                FlowField::NAMES.join(", ")
-            ))
-        })?,
+        Some(name) => {
+            FlowField::parse(name).map_err(|e| ApiError::BadRequest(format!("field {e}")))?
+        }
     };
     if query.time.is_some_and(|t| !t.is_finite()) {
         return Err(ApiError::BadRequest(
