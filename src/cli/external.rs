@@ -5,6 +5,17 @@ use super::{BenchArgs, EXIT_ERROR};
 
 /// `mpsfsi serve`: the HTTP job service on a tokio runtime until SIGTERM / Ctrl-C.
 pub fn serve(config: mpsfsi::service::Config) -> i32 {
+    block_on(mpsfsi::service::serve(config))
+}
+
+/// `mpsfsi worker`: runs jobs of a shared database until SIGTERM / Ctrl-C.
+pub fn worker(args: mpsfsi::service::WorkerArgs) -> i32 {
+    block_on(mpsfsi::service::run_worker(args.into()))
+}
+
+fn block_on(
+    service: impl std::future::Future<Output = Result<(), mpsfsi::service::ServeError>>,
+) -> i32 {
     let runtime = match tokio::runtime::Runtime::new() {
         Ok(r) => r,
         Err(e) => {
@@ -12,7 +23,7 @@ pub fn serve(config: mpsfsi::service::Config) -> i32 {
             return EXIT_ERROR;
         }
     };
-    match runtime.block_on(mpsfsi::service::serve(config)) {
+    match runtime.block_on(service) {
         Ok(()) => 0,
         Err(e) => {
             eprintln!("error: {e}");

@@ -74,6 +74,9 @@ pub enum Command {
     Schema,
     /// Run the HTTP job service (README.md, api/openapi.yaml).
     Serve(mpsfsi::service::Config),
+    /// Run jobs from a shared job database (`--database postgres://…`) without serving
+    /// HTTP; API nodes are `mpsfsi serve` on the same database (README.md).
+    Worker(mpsfsi::service::WorkerArgs),
     /// Run the run-time-versus-error study and write its report (docs/performance.md).
     Bench(BenchArgs),
 }
@@ -150,6 +153,7 @@ pub fn main(cli: Cli) -> i32 {
             0
         }
         Command::Serve(args) => external::serve(args),
+        Command::Worker(args) => external::worker(args),
         Command::Bench(args) => external::bench(args),
     }
 }

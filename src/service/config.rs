@@ -14,12 +14,28 @@ pub struct Config {
     /// Address to listen on (port 0 picks a free port).
     #[arg(long, env = "MPSFSI_ADDR", default_value = "127.0.0.1:8080")]
     pub addr: SocketAddr,
-    /// Data directory: jobs.db and one run directory per job under jobs/<id>/.
+    /// Data directory: jobs.db (unless --database) and one run directory per job under
+    /// jobs/<id>/.
     #[arg(long = "data", env = "MPSFSI_DATA", default_value = "mpsfsi-data")]
     pub data_dir: PathBuf,
-    /// Jobs run at the same time (each one also uses the rayon thread pool).
+    /// Job database: `postgres://…` shares the queue and the results with other API
+    /// nodes and `mpsfsi worker` processes; the default is SQLite in the data directory.
+    #[arg(long, env = "MPSFSI_DATABASE", value_name = "URL")]
+    pub database: Option<String>,
+    /// Jobs run at the same time (each one also uses the rayon thread pool); 0 serves
+    /// without running jobs (with --database postgres://…, workers elsewhere run them).
     #[arg(long, env = "MPSFSI_WORKERS", default_value_t = 1)]
     pub workers: usize,
+    /// Postgres only: seconds a worker's claim on a job lasts without renewal (renewed
+    /// every third of it; a killed worker's job is claimed again after it).
+    #[arg(long = "lease-s", env = "MPSFSI_LEASE_S", default_value_t = 30.0,
+          value_parser = positive_seconds)]
+    pub lease_s: f64,
+    /// Postgres only: claims of one job before an expired lease fails it with reason
+    /// `attempts exhausted` (a job that kills its worker every time).
+    #[arg(long, env = "MPSFSI_MAX_ATTEMPTS", default_value_t = 3,
+          value_parser = clap::value_parser!(u32).range(1..))]
+    pub max_attempts: u32,
     /// Jobs that may wait in the queue; beyond it submissions get 503 + Retry-After.
     #[arg(long, env = "MPSFSI_QUEUE_CAPACITY", default_value_t = 64)]
     pub queue_capacity: usize,
@@ -82,7 +98,10 @@ impl Config {
         Self {
             addr: SocketAddr::from(([127, 0, 0, 1], 0)),
             data_dir: data_dir.into(),
+            database: None,
             workers: 1,
+            lease_s: 30.0,
+            max_attempts: 3,
             queue_capacity: 64,
             max_particles: 500_000,
             max_body_bytes: 1 << 20,
@@ -105,13 +124,74 @@ impl Config {
     }
 
     pub fn database_url(&self) -> String {
-        format!(
-            "sqlite://{}?mode=rwc",
-            self.data_dir.join("jobs.db").display()
-        )
+        match &self.database {
+            Some(url) => url.clone(),
+            None => format!(
+                "sqlite://{}?mode=rwc",
+                self.data_dir.join("jobs.db").display()
+            ),
+        }
     }
 
     pub fn job_dir(&self, id: &uuid::Uuid) -> PathBuf {
         self.data_dir.join("jobs").join(id.to_string())
+    }
+}
+
+fn positive_seconds(s: &str) -> Result<f64, String> {
+    match s.parse::<f64>() {
+        Ok(v) if v.is_finite() && v > 0.0 => Ok(v),
+        Ok(_) => Err("must be a positive number of seconds".into()),
+        Err(e) => Err(e.to_string()),
+    }
+}
+
+/// `mpsfsi worker`: runs jobs from a shared (Postgres) store, serves nothing.
+#[derive(Debug, Clone, clap::Args)]
+pub struct WorkerArgs {
+    /// The job database the API nodes use: `postgres://…`.
+    #[arg(long, env = "MPSFSI_DATABASE", value_name = "URL")]
+    pub database: String,
+    /// Where run directories go (jobs/<id>/; snapshots stay here, the job record says
+    /// where).
+    #[arg(long = "data", env = "MPSFSI_DATA", default_value = "mpsfsi-data")]
+    pub data_dir: PathBuf,
+    /// Jobs this process runs at the same time.
+    #[arg(long, env = "MPSFSI_WORKERS", default_value_t = 1,
+          value_parser = clap::value_parser!(u64).range(1..))]
+    pub workers: u64,
+    /// Seconds a claim lasts without renewal (renewed every third of it).
+    #[arg(long = "lease-s", env = "MPSFSI_LEASE_S", default_value_t = 30.0,
+          value_parser = positive_seconds)]
+    pub lease_s: f64,
+    /// Claims of one job before an expired lease fails it (`attempts exhausted`).
+    #[arg(long, env = "MPSFSI_MAX_ATTEMPTS", default_value_t = 3,
+          value_parser = clap::value_parser!(u32).range(1..))]
+    pub max_attempts: u32,
+    /// Largest number of fluid particles a case may create (checked again at claim).
+    #[arg(long, env = "MPSFSI_MAX_PARTICLES", default_value_t = 500_000)]
+    pub max_particles: usize,
+    /// Seconds a shutdown waits for running jobs before giving them back to the queue.
+    #[arg(long, env = "MPSFSI_SHUTDOWN_GRACE_S", default_value_t = 10.0)]
+    pub shutdown_grace_s: f64,
+}
+
+impl From<WorkerArgs> for Config {
+    fn from(w: WorkerArgs) -> Self {
+        Self {
+            database: Some(w.database),
+            workers: w.workers as usize,
+            lease_s: w.lease_s,
+            max_attempts: w.max_attempts,
+            max_particles: w.max_particles,
+            shutdown_grace_s: w.shutdown_grace_s,
+            data_dir: w.data_dir,
+            // a worker serves nothing
+            addr: SocketAddr::from(([127, 0, 0, 1], 0)),
+            queue_capacity: 0,
+            max_body_bytes: 0,
+            token_file: None,
+            token: None,
+        }
     }
 }

@@ -30,6 +30,12 @@ pub enum ApiError {
     AlreadyFinished { id: String, status: String },
     #[error("job {0} has no snapshots (yet): its case sets output.snapshot_interval to \"none\", or no snapshot has been written")]
     NoSnapshots(String),
+    #[error("job {id} ran on worker {worker}: its snapshots are in {dir} on that host, which this node cannot read (the loads, bodies and probes are served by every node)")]
+    SnapshotsElsewhere {
+        id: String,
+        worker: String,
+        dir: String,
+    },
     #[error("no route for {0}")]
     RouteNotFound(String),
     #[error("method not allowed")]
@@ -53,9 +59,10 @@ impl ApiError {
             Self::InvalidCase(_) => StatusCode::UNPROCESSABLE_ENTITY,
             Self::PayloadTooLarge { .. } => StatusCode::PAYLOAD_TOO_LARGE,
             Self::QueueFull { .. } | Self::ShuttingDown => StatusCode::SERVICE_UNAVAILABLE,
-            Self::JobNotFound(_) | Self::RouteNotFound(_) | Self::NoSnapshots(_) => {
-                StatusCode::NOT_FOUND
-            }
+            Self::JobNotFound(_)
+            | Self::RouteNotFound(_)
+            | Self::NoSnapshots(_)
+            | Self::SnapshotsElsewhere { .. } => StatusCode::NOT_FOUND,
             Self::Unauthorized(_) => StatusCode::UNAUTHORIZED,
             Self::AlreadyFinished { .. } => StatusCode::CONFLICT,
             Self::MethodNotAllowed => StatusCode::METHOD_NOT_ALLOWED,
@@ -74,7 +81,7 @@ impl ApiError {
             Self::Unauthorized(_) => "unauthorized",
             Self::JobNotFound(_) => "job_not_found",
             Self::AlreadyFinished { .. } => "job_finished",
-            Self::NoSnapshots(_) => "no_snapshots",
+            Self::NoSnapshots(_) | Self::SnapshotsElsewhere { .. } => "no_snapshots",
             Self::RouteNotFound(_) => "route_not_found",
             Self::MethodNotAllowed => "method_not_allowed",
             Self::ShuttingDown => "shutting_down",

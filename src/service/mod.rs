@@ -1,5 +1,6 @@
 //! The job service of DESIGN.md §2.4: submit cases over HTTP, run them on a bounded
-//! worker pool, persist the job records (SQLite) and run directories under the data
+//! worker pool, persist the job records (SQLite, or Postgres shared by many API nodes
+//! and `mpsfsi worker` processes: [`store`]) and run directories under the data
 //! directory, and serve the load histories.
 //!
 //! Layout, after zero-to-production:
@@ -32,9 +33,9 @@ pub mod startup;
 pub mod store;
 pub mod workers;
 
-pub use config::{Config, Token};
+pub use config::{Config, Token, WorkerArgs};
 pub use error::ApiError;
-pub use startup::{serve, App, ServeError, ShutdownHandle};
+pub use startup::{run_worker, serve, App, ServeError, ShutdownHandle};
 
 /// The HTTP contract, served as JSON by `GET /v1/openapi.json`.
 pub const OPENAPI_YAML: &str = include_str!("../../api/openapi.yaml");

@@ -122,6 +122,9 @@ pub fn job_json(row: &JobRow) -> Value {
         "particles": row.particles,
         "reason": row.reason,
         "summary": summary,
+        "attempts": row.attempts,
+        "worker": row.worker,
+        "run_dir": row.run_dir,
         "links": {
             "self": base,
             "loads": format!("{base}/loads"),
@@ -131,6 +134,16 @@ pub fn job_json(row: &JobRow) -> Value {
             "probes": format!("{base}/probes"),
         },
     })
+}
+
+/// Where a job's run directory is readable from this node: the directory its worker
+/// recorded when this host can see it, else this node's own job directory.
+fn run_dir(state: &AppState, row: &JobRow) -> std::path::PathBuf {
+    row.run_dir
+        .as_deref()
+        .map(std::path::PathBuf::from)
+        .filter(|dir| dir.is_dir())
+        .unwrap_or_else(|| state.jobs.config.job_dir(&row.id))
 }
 
 fn parse_id(id: &str) -> Result<Uuid, ApiError> {
@@ -186,8 +199,12 @@ async fn submit_job(
 
     let id = Uuid::new_v4();
     let dir = config.job_dir(&id);
-    tokio::fs::create_dir_all(&dir).await?;
-    tokio::fs::write(dir.join("case.json"), &case_text).await?;
+    // with a shared store the worker writes the run directory, on its own host
+    let shared = state.jobs.store.is_shared();
+    if !shared {
+        tokio::fs::create_dir_all(&dir).await?;
+        tokio::fs::write(dir.join("case.json"), &case_text).await?;
+    }
     let admission = state
         .jobs
         .store
@@ -212,14 +229,18 @@ async fn submit_job(
                 .into_response())
         }
         Ok(Admission::QueueFull) => {
-            let _ = tokio::fs::remove_dir_all(&dir).await;
+            if !shared {
+                let _ = tokio::fs::remove_dir_all(&dir).await;
+            }
             Err(ApiError::QueueFull {
                 capacity: config.queue_capacity,
                 retry_after_s: RETRY_AFTER_S,
             })
         }
         Err(e) => {
-            let _ = tokio::fs::remove_dir_all(&dir).await;
+            if !shared {
+                let _ = tokio::fs::remove_dir_all(&dir).await;
+            }
             Err(e.into())
         }
     }
@@ -281,7 +302,7 @@ async fn get_job(
 ) -> Result<Response, ApiError> {
     let row = find_job(&state, &id).await?;
     if accepts(&headers, "text/html") {
-        let dir = state.jobs.config.job_dir(&row.id);
+        let dir = run_dir(&state, &row);
         let times = tokio::task::spawn_blocking(move || snapshot_times(&dir))
             .await
             .map_err(ApiError::internal)?
@@ -308,8 +329,10 @@ async fn cancel_job(
         let row = find_job(&state, &id).await?;
         return Ok((StatusCode::OK, Json(job_json(&row))).into_response());
     }
-    // Running (or claimed since we looked): the run stops at its next step.
+    // Running (or claimed since we looked): the run stops at its next step, here or on
+    // the worker that holds it (at its next lease renewal).
     state.jobs.request_cancel(row.id);
+    state.jobs.store.request_cancel(row.id).await?;
     let row = find_job(&state, &id).await?;
     if row.status.is_finished() {
         return Ok((StatusCode::OK, Json(job_json(&row))).into_response());
@@ -337,6 +360,12 @@ async fn read_series(
     row: &JobRow,
     file: SeriesFile,
 ) -> Result<Vec<u8>, ApiError> {
+    if let Some(bytes) = state.jobs.store.read_series(row.id, file.file).await? {
+        if bytes.is_empty() {
+            return Ok(format!("{}\n", file.header).into_bytes());
+        }
+        return Ok(series::complete_lines(&bytes).to_vec());
+    }
     let path = state.jobs.config.job_dir(&row.id).join(file.file);
     match tokio::fs::read(&path).await {
         Ok(bytes) => Ok(series::complete_lines(&bytes).to_vec()),
@@ -441,10 +470,18 @@ async fn get_snapshot_svg(
         .transpose()
         .map_err(|e| ApiError::BadRequest(format!("window: {e}")))?;
     let row = find_job(&state, &id).await?;
-    let dir = state.jobs.config.job_dir(&row.id);
+    let dir = run_dir(&state, &row);
     let name = row.name.clone();
+    let row = row.clone();
     let svg = tokio::task::spawn_blocking(move || {
         let snapshot = read_snapshot(&dir, query.time).map_err(|e| match e {
+            SnapshotError::None if !dir.is_dir() && row.run_dir.is_some() => {
+                ApiError::SnapshotsElsewhere {
+                    id,
+                    worker: row.worker.clone().unwrap_or_default(),
+                    dir: row.run_dir.clone().unwrap_or_default(),
+                }
+            }
             SnapshotError::None => ApiError::NoSnapshots(id),
             SnapshotError::Io(e) => ApiError::internal(e),
         })?;

@@ -5,7 +5,8 @@
 //! SIGTERM, Ctrl-C or a [`ShutdownHandle`], then shuts down in order: stop accepting and
 //! finish in-flight requests; stop claiming jobs; give running jobs the grace period;
 //! interrupt the rest at their next step (recorded `failed` / `interrupted`); close the
-//! database. Queued jobs stay queued and run after the next start.
+//! database. Queued jobs stay queued and run after the next start. [`run_worker`] is the
+//! same without the listener: `mpsfsi worker` on a shared store.
 
 use super::auth::{self, AccessError};
 use super::config::Token;
@@ -27,6 +28,8 @@ pub enum ServeError {
         path: String,
         source: std::io::Error,
     },
+    #[error("mpsfsi worker needs a shared job database: --database postgres://… (with the embedded SQLite store, `mpsfsi serve` runs the jobs itself)")]
+    NotShared,
     #[error("cannot open the job database: {0}")]
     Database(#[from] sqlx::Error),
     #[error("cannot listen on {addr}: {source}")]
@@ -119,10 +122,7 @@ impl App {
             ..
         } = self;
         let config = jobs.config.clone();
-        let workers: Vec<_> = (0..config.workers.max(1))
-            .map(|_| tokio::spawn(run_worker_until_stopped(jobs.clone())))
-            .collect();
-        jobs.job_queued(); // jobs re-queued from a previous process
+        let workers = spawn_workers(&jobs);
 
         let mut stop = shutdown.subscribe();
         let signal = async move {
@@ -137,22 +137,37 @@ impl App {
             .with_graceful_shutdown(signal)
             .await;
 
-        jobs.stop_claiming();
-        let deadline = Instant::now() + config.shutdown_grace();
-        while jobs.running_jobs() > 0 && Instant::now() < deadline {
-            tokio::time::sleep(std::time::Duration::from_millis(50)).await;
-        }
-        if jobs.running_jobs() > 0 {
-            tracing::warn!(running = jobs.running_jobs(), "interrupting running jobs");
-        }
-        jobs.interrupt_running();
-        for worker in workers {
-            let _ = worker.await;
-        }
-        jobs.store.close().await;
-        tracing::info!("stopped");
+        drain(&jobs, workers).await;
         served.map_err(ServeError::Serve)
     }
+}
+
+/// `config.workers` worker loops (none with `--workers 0`).
+fn spawn_workers(jobs: &Arc<Jobs>) -> Vec<tokio::task::JoinHandle<()>> {
+    let workers = (0..jobs.config.workers)
+        .map(|_| tokio::spawn(run_worker_until_stopped(jobs.clone())))
+        .collect();
+    jobs.job_queued(); // jobs re-queued from a previous process
+    workers
+}
+
+/// Stop claiming; give running jobs the grace period; interrupt the rest at their next
+/// step (SQLite: `failed` / `interrupted`; Postgres: back to the queue); close the store.
+async fn drain(jobs: &Arc<Jobs>, workers: Vec<tokio::task::JoinHandle<()>>) {
+    jobs.stop_claiming();
+    let deadline = Instant::now() + jobs.config.shutdown_grace();
+    while jobs.running_jobs() > 0 && Instant::now() < deadline {
+        tokio::time::sleep(std::time::Duration::from_millis(50)).await;
+    }
+    if jobs.running_jobs() > 0 {
+        tracing::warn!(running = jobs.running_jobs(), "interrupting running jobs");
+    }
+    jobs.interrupt_running();
+    for worker in workers {
+        let _ = worker.await;
+    }
+    jobs.store.close().await;
+    tracing::info!("stopped");
 }
 
 async fn os_signal() {
@@ -178,15 +193,47 @@ async fn os_signal() {
     }
 }
 
-/// `mpsfsi serve`: log to stderr (`RUST_LOG`, default `info`), build, serve until SIGTERM
-/// or Ctrl-C, shut down gracefully.
-pub async fn serve(config: Config) -> Result<(), ServeError> {
+fn log_to_stderr() {
     let filter = tracing_subscriber::EnvFilter::try_from_default_env()
         .unwrap_or_else(|_| tracing_subscriber::EnvFilter::new("info"));
     let _ = tracing_subscriber::fmt()
         .with_env_filter(filter)
         .with_writer(std::io::stderr)
         .try_init();
+}
+
+/// `mpsfsi worker`: claim and run jobs of a shared (Postgres) store until SIGTERM or
+/// Ctrl-C; then finish or give back the running jobs (the grace period) and stop.
+pub async fn run_worker(config: Config) -> Result<(), ServeError> {
+    log_to_stderr();
+    let url = config.database_url();
+    if !super::store::is_postgres_url(&url) {
+        return Err(ServeError::NotShared);
+    }
+    let jobs_dir = config.data_dir.join("jobs");
+    std::fs::create_dir_all(&jobs_dir).map_err(|source| ServeError::DataDir {
+        path: jobs_dir.display().to_string(),
+        source,
+    })?;
+    let store = JobStore::open(&url).await?;
+    let jobs = Arc::new(Jobs::new(store, config));
+    tracing::info!(
+        data = %jobs.config.data_dir.display(),
+        workers = jobs.config.workers,
+        lease_s = jobs.config.lease_s,
+        "mpsfsi worker running"
+    );
+    let workers = spawn_workers(&jobs);
+    os_signal().await;
+    tracing::info!("shutdown signal received");
+    drain(&jobs, workers).await;
+    Ok(())
+}
+
+/// `mpsfsi serve`: log to stderr (`RUST_LOG`, default `info`), build, serve until SIGTERM
+/// or Ctrl-C, shut down gracefully.
+pub async fn serve(config: Config) -> Result<(), ServeError> {
+    log_to_stderr();
     let app = App::build(config.clone()).await?;
     tracing::info!(
         addr = %format!("{}:{}", config.addr.ip(), app.port()),

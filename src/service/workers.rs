@@ -9,8 +9,15 @@
 //! with reason `interrupted`, exactly as if the process had died). The decision is the
 //! observer's ([`Observer::stop_reason`]), so the job's summary.json says the same as its
 //! record.
+//!
+//! With a shared store (Postgres) a worker holds its job under a lease that a task
+//! renews every third of the lease ([`LeaseKeeper`]); the renewal also carries a
+//! cancellation requested through any API node, and a lost lease stops the run. The
+//! run's CSV files are uploaded as they grow ([`SeriesUpload`]), and a worker shutting
+//! down gives its job back to the queue instead of failing it.
 
-use super::store::{ClaimedJob, JobStatus, JobStore};
+use super::series::{self, SeriesFile};
+use super::store::{Claimant, ClaimedJob, JobStatus, JobStore, Renewal};
 use super::Config;
 use crate::case::{parse_case_str, CaseError, ValidCase};
 use crate::engine::SimError;
@@ -27,6 +34,10 @@ use uuid::Uuid;
 /// Reason recorded for a job whose run was stopped by a shutdown or a dead process.
 pub const INTERRUPTED: &str = "interrupted";
 
+/// Reason a run stops with when its worker lost the lease (never recorded: the job
+/// belongs to another attempt by then).
+const LEASE_LOST: &str = "lease lost";
+
 /// State shared by the routes and the workers.
 #[derive(Debug)]
 pub struct Jobs {
@@ -41,6 +52,7 @@ pub struct Jobs {
     /// Running jobs stop at their next step once set.
     interrupt: Arc<AtomicBool>,
     running: AtomicUsize,
+    claimant: Claimant,
 }
 
 /// What one worker step did.
@@ -52,7 +64,14 @@ pub enum ExecutionOutcome {
 
 impl Jobs {
     pub fn new(store: JobStore, config: Config) -> Self {
+        let claimant = Claimant {
+            worker: worker_name(),
+            jobs_dir: format!("{}/", config.data_dir.join("jobs").display()),
+            lease_s: config.lease_s,
+            max_attempts: config.max_attempts,
+        };
         Self {
+            claimant,
             store,
             config,
             wake: Notify::new(),
@@ -103,24 +122,89 @@ impl Jobs {
     }
 }
 
+/// `host:pid` of this process, as job records name the worker that ran them.
+fn worker_name() -> String {
+    let host = std::fs::read_to_string("/proc/sys/kernel/hostname")
+        .ok()
+        .map(|h| h.trim().to_string())
+        .filter(|h| !h.is_empty())
+        .or_else(|| std::env::var("HOSTNAME").ok())
+        .unwrap_or_else(|| "localhost".to_string());
+    format!("{host}:{}", std::process::id())
+}
+
 /// The run observer of one job: cancel/interrupt flags and throttled progress writes.
 struct JobObserver {
     id: Uuid,
+    attempt: i64,
     store: JobStore,
     runtime: tokio::runtime::Handle,
     cancel: Arc<AtomicBool>,
     interrupt: Arc<AtomicBool>,
+    lease_lost: Arc<AtomicBool>,
     last_write: Instant,
+    /// With a shared store: the run's CSV files still to upload.
+    upload: Option<SeriesUpload>,
+    last_upload: Instant,
 }
 
 const PROGRESS_EVERY: Duration = Duration::from_millis(250);
+/// A running job's loads reach the shared store at most this late.
+const UPLOAD_EVERY: Duration = Duration::from_secs(1);
+
+/// The part of each run CSV file not yet in the shared store: complete lines are
+/// appended at their byte offset, so a reader sees whole rows.
+struct SeriesUpload {
+    dir: std::path::PathBuf,
+    files: Vec<(SeriesFile, u64)>,
+}
+
+impl SeriesUpload {
+    fn new(dir: std::path::PathBuf) -> Self {
+        let files = [series::LOADS, series::BODIES, series::PROBES]
+            .into_iter()
+            .map(|f| (f, 0))
+            .collect();
+        Self { dir, files }
+    }
+
+    /// Upload what the files gained; `Ok(false)` when the attempt lost the job.
+    async fn sync(
+        &mut self,
+        store: &JobStore,
+        id: Uuid,
+        attempt: i64,
+    ) -> Result<bool, std::io::Error> {
+        let JobStore::Postgres(pg) = store else {
+            return Ok(true);
+        };
+        for (file, offset) in &mut self.files {
+            let bytes = match tokio::fs::read(self.dir.join(file.file)).await {
+                Ok(b) => b,
+                Err(e) if e.kind() == std::io::ErrorKind::NotFound => continue,
+                Err(e) => return Err(e),
+            };
+            let start = (*offset as usize).min(bytes.len());
+            let new = series::complete_lines(&bytes[start..]);
+            if new.is_empty() {
+                continue;
+            }
+            match pg.append_series(id, attempt, file.file, *offset, new).await {
+                Ok(true) => *offset += new.len() as u64,
+                Ok(false) => return Ok(false),
+                Err(e) => return Err(std::io::Error::other(e)),
+            }
+        }
+        Ok(true)
+    }
+}
 
 impl Observer for JobObserver {
     fn started(&mut self, particles: usize, estimated_steps: u64) {
         tracing::info!(particles, estimated_steps, "run started");
-        if let Err(e) = self
-            .runtime
-            .block_on(self.store.set_started(self.id, particles))
+        if let Err(e) =
+            self.runtime
+                .block_on(self.store.set_started(self.id, self.attempt, particles))
         {
             tracing::warn!(error = %e, "cannot record the particle count");
         }
@@ -129,17 +213,34 @@ impl Observer for JobObserver {
     fn progress(&mut self, p: &Progress) {
         if self.last_write.elapsed() >= PROGRESS_EVERY {
             self.last_write = Instant::now();
-            if let Err(e) =
-                self.runtime
-                    .block_on(self.store.set_progress(self.id, p.step, p.simulated_time))
-            {
+            if let Err(e) = self.runtime.block_on(self.store.set_progress(
+                self.id,
+                self.attempt,
+                p.step,
+                p.simulated_time,
+            )) {
                 tracing::warn!(error = %e, "cannot record progress");
+            }
+        }
+        if self.last_upload.elapsed() >= UPLOAD_EVERY {
+            self.last_upload = Instant::now();
+            if let Some(upload) = &mut self.upload {
+                match self
+                    .runtime
+                    .block_on(upload.sync(&self.store, self.id, self.attempt))
+                {
+                    Ok(true) => {}
+                    Ok(false) => self.lease_lost.store(true, Ordering::SeqCst),
+                    Err(e) => tracing::warn!(error = %e, "cannot upload the run's files"),
+                }
             }
         }
     }
 
     fn is_cancelled(&self) -> bool {
-        self.cancel.load(Ordering::Relaxed) || self.interrupt.load(Ordering::Relaxed)
+        self.cancel.load(Ordering::Relaxed)
+            || self.interrupt.load(Ordering::Relaxed)
+            || self.lease_lost.load(Ordering::Relaxed)
     }
 
     /// A user's DELETE: `cancelled`. Otherwise the service's shutdown stopped the run:
@@ -151,9 +252,49 @@ impl Observer for JobObserver {
                 RunStatus::Cancelled,
                 SimError::Cancelled { step, time }.to_string(),
             )
+        } else if self.lease_lost.load(Ordering::SeqCst) {
+            (RunStatus::Failed, LEASE_LOST.to_string())
         } else {
             (RunStatus::Failed, INTERRUPTED.to_string())
         }
+    }
+}
+
+/// Renews a shared store's lease every third of it while the run goes on: a cancel
+/// request sets the job's cancel flag, a lost lease stops the run.
+struct LeaseKeeper(tokio::task::JoinHandle<()>);
+
+impl LeaseKeeper {
+    fn start(
+        store: JobStore,
+        id: Uuid,
+        attempt: i64,
+        lease_s: f64,
+        cancel: Arc<AtomicBool>,
+        lost: Arc<AtomicBool>,
+    ) -> Self {
+        let every = Duration::from_secs_f64((lease_s / 3.0).max(0.05));
+        Self(tokio::spawn(async move {
+            loop {
+                tokio::time::sleep(every).await;
+                match store.renew(id, attempt, lease_s).await {
+                    Ok(Renewal::Held { cancel: true }) => cancel.store(true, Ordering::SeqCst),
+                    Ok(Renewal::Held { cancel: false }) => {}
+                    Ok(Renewal::Lost) => {
+                        tracing::warn!("the job's lease was lost: stopping its run");
+                        lost.store(true, Ordering::SeqCst);
+                        return;
+                    }
+                    Err(e) => tracing::warn!(error = %e, "cannot renew the lease"),
+                }
+            }
+        }))
+    }
+}
+
+impl Drop for LeaseKeeper {
+    fn drop(&mut self) {
+        self.0.abort();
     }
 }
 
@@ -162,7 +303,7 @@ pub async fn try_execute_job(jobs: &Arc<Jobs>) -> Result<ExecutionOutcome, sqlx:
     if jobs.is_stopping() {
         return Ok(ExecutionOutcome::EmptyQueue);
     }
-    let Some(job) = jobs.store.claim_next().await? else {
+    let Some(job) = jobs.store.claim_next(&jobs.claimant).await? else {
         return Ok(ExecutionOutcome::EmptyQueue);
     };
     let id = job.row.id;
@@ -176,25 +317,75 @@ pub async fn try_execute_job(jobs: &Arc<Jobs>) -> Result<ExecutionOutcome, sqlx:
 
 async fn execute(jobs: &Arc<Jobs>, job: ClaimedJob) -> Result<JobStatus, sqlx::Error> {
     let id = job.row.id;
-    let observer = JobObserver {
+    let attempt = job.attempt();
+    let shared = jobs.store.is_shared();
+    let dir = jobs.config.job_dir(&id);
+    if shared {
+        // this worker may hold an earlier attempt's files; the case comes from the store
+        let _ = tokio::fs::remove_dir_all(&dir).await;
+        let written = async {
+            tokio::fs::create_dir_all(&dir).await?;
+            tokio::fs::write(dir.join("case.json"), &job.case_json).await
+        };
+        if let Err(e) = written.await {
+            tracing::error!(error = %e, dir = %dir.display(), "cannot create the run directory");
+        }
+    }
+    let cancel = jobs.cancel_flag(id);
+    let lease_lost = Arc::new(AtomicBool::new(false));
+    let _lease = shared.then(|| {
+        LeaseKeeper::start(
+            jobs.store.clone(),
+            id,
+            attempt,
+            jobs.config.lease_s,
+            cancel.clone(),
+            lease_lost.clone(),
+        )
+    });
+    let mut observer = JobObserver {
         id,
+        attempt,
         store: jobs.store.clone(),
         runtime: tokio::runtime::Handle::current(),
-        cancel: jobs.cancel_flag(id),
+        cancel: cancel.clone(),
         interrupt: jobs.interrupt.clone(),
+        lease_lost: lease_lost.clone(),
         last_write: Instant::now(),
+        upload: shared.then(|| SeriesUpload::new(dir.clone())),
+        last_upload: Instant::now(),
     };
-    let dir = jobs.config.job_dir(&id);
     let limits = jobs.config.limits();
     let span = tracing::Span::current();
+    let run_dir = dir.clone();
     let outcome = tokio::task::spawn_blocking(move || -> Result<_, CaseError> {
         let _entered = span.enter();
-        let mut observer = observer;
+        let dir = run_dir;
         // this service's limits, which may differ from those the job was submitted under
         let case = ValidCase::new(parse_case_str(&job.case_json)?, &limits)?;
-        Ok(run_case(&case, &dir, &mut observer))
+        let run = run_case(&case, &dir, &mut observer);
+        Ok((run, observer.upload))
     })
     .await;
+    let (outcome, upload) = match outcome {
+        Ok(Ok((run, upload))) => (Ok(Ok(run)), upload),
+        Ok(Err(e)) => (Ok(Err(e)), None),
+        Err(join) => (Err(join), None),
+    };
+    if lease_lost.load(Ordering::SeqCst) {
+        tracing::warn!("the lease was lost: this attempt's outcome is discarded");
+        return Ok(JobStatus::Failed);
+    }
+    let interrupted = jobs.interrupt.load(Ordering::SeqCst) && !cancel.load(Ordering::SeqCst);
+    if shared && interrupted && jobs.store.release(id, attempt).await? {
+        tracing::info!("the job went back to the queue");
+        return Ok(JobStatus::Queued);
+    }
+    if let Some(mut upload) = upload {
+        if let Err(e) = upload.sync(&jobs.store, id, attempt).await {
+            tracing::error!(error = %e, "cannot upload the run's files");
+        }
+    }
 
     let (status, reason, summary, steps, time) = match outcome {
         Ok(Ok(Ok(summary))) => {
@@ -244,9 +435,11 @@ async fn execute(jobs: &Arc<Jobs>, job: ClaimedJob) -> Result<JobStatus, sqlx::E
         steps,
         "run finished"
     );
-    jobs.store
+    let recorded = jobs
+        .store
         .finish(
             id,
+            attempt,
             status,
             reason.as_deref(),
             summary.as_deref(),
@@ -254,6 +447,9 @@ async fn execute(jobs: &Arc<Jobs>, job: ClaimedJob) -> Result<JobStatus, sqlx::E
             time,
         )
         .await?;
+    if !recorded {
+        tracing::warn!("another attempt holds the job: this outcome is discarded");
+    }
     Ok(status)
 }
 

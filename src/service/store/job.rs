@@ -1,0 +1,163 @@
+//! The job record shared by both stores: status, row, the claim a worker holds.
+
+use serde::{Deserialize, Serialize};
+use time::format_description::well_known::Rfc3339;
+use time::OffsetDateTime;
+use uuid::Uuid;
+
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum JobStatus {
+    Queued,
+    Running,
+    Succeeded,
+    Failed,
+    Cancelled,
+}
+
+impl JobStatus {
+    pub fn as_str(self) -> &'static str {
+        match self {
+            Self::Queued => "queued",
+            Self::Running => "running",
+            Self::Succeeded => "succeeded",
+            Self::Failed => "failed",
+            Self::Cancelled => "cancelled",
+        }
+    }
+
+    pub fn parse(s: &str) -> Option<Self> {
+        Some(match s {
+            "queued" => Self::Queued,
+            "running" => Self::Running,
+            "succeeded" => Self::Succeeded,
+            "failed" => Self::Failed,
+            "cancelled" => Self::Cancelled,
+            _ => return None,
+        })
+    }
+
+    pub fn is_finished(self) -> bool {
+        matches!(self, Self::Succeeded | Self::Failed | Self::Cancelled)
+    }
+}
+
+/// Reason recorded for a job whose expired lease could not be claimed again.
+pub const ATTEMPTS_EXHAUSTED: &str = "attempts exhausted";
+
+/// One row of the job table.
+#[derive(Debug, Clone)]
+pub struct JobRow {
+    pub id: Uuid,
+    pub name: String,
+    pub status: JobStatus,
+    pub created_at: String,
+    pub started_at: Option<String>,
+    pub finished_at: Option<String>,
+    pub step: i64,
+    pub simulated_time: f64,
+    pub end_time: f64,
+    pub particles: Option<i64>,
+    pub reason: Option<String>,
+    /// summary.json of the run, as JSON text.
+    pub summary: Option<String>,
+    /// Times a worker claimed the job (a run killed with its worker counts).
+    pub attempts: i64,
+    /// The worker that claimed it last (`host:pid`) and its run directory on that host.
+    pub worker: Option<String>,
+    pub run_dir: Option<String>,
+}
+
+/// The columns of [`JobRow`], in the order of [`RawJob`].
+pub(super) const COLUMNS: &str = "id, name, status, created_at, started_at, finished_at, step, \
+     simulated_time, end_time, particles, reason, summary, attempts, worker, run_dir";
+
+/// A row as both databases return it (text ids and statuses); [`RawJob::into_row`]
+/// checks them.
+#[derive(sqlx::FromRow)]
+pub(super) struct RawJob {
+    id: String,
+    name: String,
+    status: String,
+    created_at: String,
+    started_at: Option<String>,
+    finished_at: Option<String>,
+    step: i64,
+    simulated_time: f64,
+    end_time: f64,
+    particles: Option<i64>,
+    reason: Option<String>,
+    summary: Option<String>,
+    attempts: i64,
+    worker: Option<String>,
+    run_dir: Option<String>,
+}
+
+impl RawJob {
+    pub(super) fn into_row(self) -> Result<JobRow, sqlx::Error> {
+        let status = JobStatus::parse(&self.status).ok_or_else(|| {
+            sqlx::Error::Decode(format!("unknown job status {:?}", self.status).into())
+        })?;
+        Ok(JobRow {
+            id: Uuid::parse_str(&self.id).map_err(|e| sqlx::Error::Decode(Box::new(e)))?,
+            name: self.name,
+            status,
+            created_at: self.created_at,
+            started_at: self.started_at,
+            finished_at: self.finished_at,
+            step: self.step,
+            simulated_time: self.simulated_time,
+            end_time: self.end_time,
+            particles: self.particles,
+            reason: self.reason,
+            summary: self.summary,
+            attempts: self.attempts,
+            worker: self.worker,
+            run_dir: self.run_dir,
+        })
+    }
+}
+
+/// A claimed job: its row (whose `attempts` fences every later write) and the case.
+#[derive(Debug, Clone)]
+pub struct ClaimedJob {
+    pub row: JobRow,
+    pub case_json: String,
+}
+
+impl ClaimedJob {
+    pub fn attempt(&self) -> i64 {
+        self.row.attempts
+    }
+}
+
+/// Who claims: the worker's name, where its run directories go, its lease.
+#[derive(Debug, Clone)]
+pub struct Claimant {
+    pub worker: String,
+    /// `<data>/jobs/`: a job runs in `<jobs_dir>/<id>`.
+    pub jobs_dir: String,
+    pub lease_s: f64,
+    pub max_attempts: u32,
+}
+
+/// Outcome of a submission.
+pub enum Admission {
+    Accepted(JobRow),
+    QueueFull,
+}
+
+/// Outcome of a lease renewal.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Renewal {
+    /// Still ours; `cancel` when a client asked (through any API node) to cancel it.
+    Held { cancel: bool },
+    /// The lease expired and another worker claimed the job, or it ended: stop.
+    Lost,
+}
+
+pub fn now_rfc3339() -> String {
+    OffsetDateTime::now_utc()
+        .format(&Rfc3339)
+        .unwrap_or_default()
+}
