@@ -9,6 +9,8 @@ mod contract;
 mod helpers;
 mod limits;
 mod page;
+mod pg_server;
+mod postgres;
 mod restart;
 mod schema;
 mod submit;
