@@ -304,3 +304,44 @@ async fn a_delete_on_a_node_stops_the_job_on_a_worker_process_within_a_renewal()
     assert!(took < lease_s / 3.0 + 1.0, "cancelled after {took:.2} s");
     api.stop().await;
 }
+
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn a_worker_stopped_with_sigterm_gives_its_job_back_at_once() {
+    let Some(pg) = PgServer::start_or_skip("sigterm").await else {
+        return;
+    };
+    let url = pg.fresh_database().await;
+    let api = node(&url, "pg-term").await;
+    let lease_s = 30.0; // long: the job must come back without waiting for it
+    let data = fresh_data_dir("pg-term-w1");
+    let log = std::fs::File::create(data.join("worker.log")).unwrap();
+    let mut first = Command::new(env!("CARGO_BIN_EXE_mpsfsi"))
+        .args(["worker", "--database", &url, "--data"])
+        .arg(&data)
+        .args(["--lease-s", "30", "--shutdown-grace-s", "0"])
+        .stdout(Stdio::null())
+        .stderr(log)
+        .spawn()
+        .unwrap();
+    let id = api.submit(&tiny_case(2.0)).await;
+    api.wait_running(&id).await;
+    let term = Command::new("kill")
+        .args(["-TERM", &first.id().to_string()])
+        .status()
+        .unwrap();
+    assert!(term.success());
+    assert!(first.wait().unwrap().success(), "the worker exits cleanly");
+    let job = api.job(&id).await;
+    assert_eq!(job["status"], "queued", "{job}");
+
+    let second = worker_process(&url, &fresh_data_dir("pg-term-w2"), lease_s);
+    let job = api.wait_finished(&id).await;
+    stop(second);
+    assert_eq!(job["status"], "succeeded", "{job}");
+    assert_eq!(job["attempts"], 2);
+    let (_, _, loads) = api.get_csv(&format!("/v1/jobs/{id}/loads")).await;
+    let rows = load_rows(&loads);
+    assert_eq!(rows.len(), 2000);
+    assert!(rows.values().all(|&n| n == 1));
+    api.stop().await;
+}

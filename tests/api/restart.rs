@@ -157,3 +157,41 @@ async fn a_graceful_shutdown_interrupts_running_jobs_and_keeps_queued_ones() {
     assert_eq!(app.wait_finished(&waiting).await["status"], "succeeded");
     app.stop().await;
 }
+
+/// A data directory written before the job table was migrated by sqlx (no migration
+/// table, no `attempts` column) opens, keeps its jobs and runs new ones.
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn a_job_database_from_before_migrations_is_upgraded_in_place() {
+    let data = fresh_data_dir("upgrade");
+    let url = format!("sqlite://{}?mode=rwc", data.join("jobs.db").display());
+    let old = sqlx::SqlitePool::connect(&url).await.unwrap();
+    sqlx::raw_sql(
+        "CREATE TABLE jobs (
+            seq INTEGER PRIMARY KEY AUTOINCREMENT, id TEXT NOT NULL UNIQUE, name TEXT NOT NULL,
+            status TEXT NOT NULL, case_json TEXT NOT NULL, created_at TEXT NOT NULL,
+            started_at TEXT, finished_at TEXT, step INTEGER NOT NULL DEFAULT 0,
+            simulated_time REAL NOT NULL DEFAULT 0, end_time REAL NOT NULL, particles INTEGER,
+            reason TEXT, summary TEXT);
+         CREATE INDEX jobs_by_status ON jobs (status, seq);
+         INSERT INTO jobs (id, name, status, case_json, created_at, finished_at, step,
+                           simulated_time, end_time, particles)
+         VALUES ('0b7e9f3c-4a51-4c1e-9d2f-6f0e8a1b2c3d', 'old-tank', 'succeeded', '{}',
+                 '2026-11-01T00:00:00Z', '2026-11-01T00:01:00Z', 40, 0.02, 0.02, 300);",
+    )
+    .execute(&old)
+    .await
+    .unwrap();
+    old.close().await;
+
+    let app = spawn_app_on(data, |c| c.workers = 1).await;
+    let job = app.job("0b7e9f3c-4a51-4c1e-9d2f-6f0e8a1b2c3d").await;
+    assert_eq!(job["status"], "succeeded", "{job}");
+    assert_eq!(job["name"], "old-tank");
+    assert_eq!(job["attempts"], 0);
+    assert_eq!(job["progress"]["step"], 40);
+    let new = app.submit(&tiny_case(0.002)).await;
+    let done = app.wait_finished(&new).await;
+    assert_eq!(done["status"], "succeeded", "{done}");
+    assert_eq!(done["attempts"], 1);
+    app.stop().await;
+}
