@@ -143,7 +143,7 @@ pub struct Claimant {
 
 /// Outcome of a submission.
 pub enum Admission {
-    Accepted(JobRow),
+    Accepted(Box<JobRow>),
     QueueFull,
 }
 

@@ -68,7 +68,7 @@ impl PgStore {
         .await?;
         tx.commit().await?;
         Ok(match row {
-            Some(r) => Admission::Accepted(r.into_row()?),
+            Some(r) => Admission::Accepted(Box::new(r.into_row()?)),
             None => Admission::QueueFull,
         })
     }

@@ -72,7 +72,7 @@ impl SqliteStore {
         .fetch_optional(&self.pool)
         .await?;
         Ok(match row {
-            Some(r) => Admission::Accepted(r.into_row()?),
+            Some(r) => Admission::Accepted(Box::new(r.into_row()?)),
             None => Admission::QueueFull,
         })
     }
