@@ -21,7 +21,7 @@ pub struct Config {
     /// Job database: `postgres://…` shares the queue and the results with other API
     /// nodes and `mpsfsi worker` processes; the default is SQLite in the data directory.
     #[arg(long, env = "MPSFSI_DATABASE", value_name = "URL")]
-    pub database: Option<String>,
+    pub database: Option<DatabaseUrl>,
     /// Jobs run at the same time (each one also uses the rayon thread pool); 0 serves
     /// without running jobs (with --database postgres://…, workers elsewhere run them).
     #[arg(long, env = "MPSFSI_WORKERS", default_value_t = 1)]
@@ -92,6 +92,99 @@ impl std::fmt::Debug for Token {
     }
 }
 
+/// A job database URL. Its `Debug` and `Display` hide the password (in the user-info
+/// part and in a `password=` parameter), so a printed [`Config`], a log line or an error
+/// never shows it; [`DatabaseUrl::expose`] is for connecting only.
+#[derive(Clone, PartialEq, Eq)]
+pub struct DatabaseUrl(String);
+
+impl DatabaseUrl {
+    pub fn new(url: impl Into<String>) -> Self {
+        Self(url.into())
+    }
+
+    /// The URL with its password, to connect with.
+    pub fn expose(&self) -> &str {
+        &self.0
+    }
+
+    /// The password the URL carries (user-info or a `password=` parameter), if any.
+    pub fn password(&self) -> Option<&str> {
+        let url = &self.0;
+        let rest = &url[url.find("://")? + 3..];
+        let authority = &rest[..rest.find(['/', '?']).unwrap_or(rest.len())];
+        if let Some(at) = authority.rfind('@') {
+            if let Some((_, password)) = authority[..at].split_once(':') {
+                return Some(password);
+            }
+        }
+        let query = &rest[rest.find('?')? + 1..];
+        query
+            .split('&')
+            .filter_map(|p| p.split_once('='))
+            .find(|(k, _)| k.eq_ignore_ascii_case("password"))
+            .map(|(_, v)| v)
+    }
+
+    /// `text` with the password replaced by `***` (for an error from the driver).
+    pub fn scrub(&self, text: &str) -> String {
+        match self.password() {
+            Some(p) if !p.is_empty() => text.replace(p, "***"),
+            _ => text.to_string(),
+        }
+    }
+
+    /// The URL with any password replaced by `***`.
+    pub fn redacted(&self) -> String {
+        let url = &self.0;
+        let mut out = match url.find("://") {
+            Some(scheme_end) => {
+                let rest = &url[scheme_end + 3..];
+                let authority_end = rest.find(['/', '?']).unwrap_or(rest.len());
+                let authority = &rest[..authority_end];
+                match authority.rfind('@') {
+                    Some(at) if authority[..at].contains(':') => {
+                        let user = &authority[..authority[..at].find(':').unwrap_or(at)];
+                        format!("{}{user}:***{}", &url[..scheme_end + 3], &rest[at..])
+                    }
+                    _ => url.clone(),
+                }
+            }
+            None => url.clone(),
+        };
+        if let Some(query) = out.find('?') {
+            let params: Vec<String> = out[query + 1..]
+                .split('&')
+                .map(|p| match p.split_once('=') {
+                    Some((k, _)) if k.eq_ignore_ascii_case("password") => format!("{k}=***"),
+                    _ => p.to_string(),
+                })
+                .collect();
+            out = format!("{}?{}", &out[..query], params.join("&"));
+        }
+        out
+    }
+}
+
+impl std::str::FromStr for DatabaseUrl {
+    type Err = std::convert::Infallible;
+    fn from_str(s: &str) -> Result<Self, Self::Err> {
+        Ok(Self(s.to_string()))
+    }
+}
+
+impl std::fmt::Debug for DatabaseUrl {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(f, "{:?}", self.redacted())
+    }
+}
+
+impl std::fmt::Display for DatabaseUrl {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(&self.redacted())
+    }
+}
+
 impl Config {
     /// Defaults with the given data directory, on 127.0.0.1 with port 0.
     pub fn for_tests(data_dir: impl Into<PathBuf>) -> Self {
@@ -123,13 +216,14 @@ impl Config {
         Duration::from_secs_f64(self.shutdown_grace_s.max(0.0))
     }
 
-    pub fn database_url(&self) -> String {
+    /// The job database: the configured URL, or SQLite in the data directory.
+    pub fn database_url(&self) -> DatabaseUrl {
         match &self.database {
             Some(url) => url.clone(),
-            None => format!(
+            None => DatabaseUrl::new(format!(
                 "sqlite://{}?mode=rwc",
                 self.data_dir.join("jobs.db").display()
-            ),
+            )),
         }
     }
 
@@ -151,7 +245,7 @@ fn positive_seconds(s: &str) -> Result<f64, String> {
 pub struct WorkerArgs {
     /// The job database the API nodes use: `postgres://…`.
     #[arg(long, env = "MPSFSI_DATABASE", value_name = "URL")]
-    pub database: String,
+    pub database: DatabaseUrl,
     /// Where run directories go (jobs/<id>/; snapshots stay here, the job record says
     /// where).
     #[arg(long = "data", env = "MPSFSI_DATA", default_value = "mpsfsi-data")]

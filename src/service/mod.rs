@@ -33,7 +33,7 @@ pub mod startup;
 pub mod store;
 pub mod workers;
 
-pub use config::{Config, Token, WorkerArgs};
+pub use config::{Config, DatabaseUrl, Token, WorkerArgs};
 pub use error::ApiError;
 pub use startup::{run_worker, serve, App, ServeError, ShutdownHandle};
 

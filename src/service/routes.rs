@@ -44,6 +44,11 @@ pub fn endpoints() -> Vec<(Method, &'static str, MethodRouter<AppState>)> {
             on(MethodFilter::DELETE, cancel_job),
         ),
         (
+            Method::POST,
+            "/v1/jobs/{id}/cancel",
+            on(MethodFilter::POST, cancel_job),
+        ),
+        (
             Method::GET,
             "/v1/jobs/{id}/loads",
             on(MethodFilter::GET, get_loads),
@@ -132,6 +137,7 @@ pub fn job_json(row: &JobRow) -> Value {
             "snapshot_svg": format!("{base}/snapshot.svg"),
             "bodies": format!("{base}/bodies"),
             "probes": format!("{base}/probes"),
+            "cancel": format!("{base}/cancel"),
         },
     })
 }

@@ -9,7 +9,7 @@
 //! same without the listener: `mpsfsi worker` on a shared store.
 
 use super::auth::{self, AccessError};
-use super::config::Token;
+use super::config::{DatabaseUrl, Token};
 use super::routes::{router, AppState};
 use super::store::JobStore;
 use super::workers::{run_worker_until_stopped, Jobs};
@@ -30,7 +30,9 @@ pub enum ServeError {
     },
     #[error("mpsfsi worker needs a shared job database: --database postgres://… (with the embedded SQLite store, `mpsfsi serve` runs the jobs itself)")]
     NotShared,
-    #[error("cannot open the job database: {0}")]
+    #[error("cannot open the job database {url}: {message}")]
+    OpenDatabase { url: String, message: String },
+    #[error("job database: {0}")]
     Database(#[from] sqlx::Error),
     #[error("cannot listen on {addr}: {source}")]
     Bind {
@@ -72,7 +74,7 @@ impl App {
             source,
         })?;
         let openapi = super::contract::openapi_document().map_err(ServeError::OpenApi)?;
-        let store = JobStore::open(&config.database_url()).await?;
+        let store = open_store(&config.database_url()).await?;
         let interrupted = store.recover_interrupted().await?;
         if interrupted > 0 {
             tracing::warn!(
@@ -142,6 +144,16 @@ impl App {
     }
 }
 
+/// Open and migrate the job store; an error names the database without its password.
+async fn open_store(url: &DatabaseUrl) -> Result<JobStore, ServeError> {
+    JobStore::open(url.expose())
+        .await
+        .map_err(|e| ServeError::OpenDatabase {
+            url: url.redacted(),
+            message: url.scrub(&e.to_string()),
+        })
+}
+
 /// `config.workers` worker loops (none with `--workers 0`).
 fn spawn_workers(jobs: &Arc<Jobs>) -> Vec<tokio::task::JoinHandle<()>> {
     let workers = (0..jobs.config.workers)
@@ -207,7 +219,7 @@ fn log_to_stderr() {
 pub async fn run_worker(config: Config) -> Result<(), ServeError> {
     log_to_stderr();
     let url = config.database_url();
-    if !super::store::is_postgres_url(&url) {
+    if !super::store::is_postgres_url(url.expose()) {
         return Err(ServeError::NotShared);
     }
     let jobs_dir = config.data_dir.join("jobs");
@@ -215,9 +227,10 @@ pub async fn run_worker(config: Config) -> Result<(), ServeError> {
         path: jobs_dir.display().to_string(),
         source,
     })?;
-    let store = JobStore::open(&url).await?;
+    let store = open_store(&url).await?;
     let jobs = Arc::new(Jobs::new(store, config));
     tracing::info!(
+        database = %url,
         data = %jobs.config.data_dir.display(),
         workers = jobs.config.workers,
         lease_s = jobs.config.lease_s,
@@ -238,6 +251,7 @@ pub async fn serve(config: Config) -> Result<(), ServeError> {
     tracing::info!(
         addr = %format!("{}:{}", config.addr.ip(), app.port()),
         data = %config.data_dir.display(),
+        database = %config.database_url(),
         workers = config.workers,
         token = config.token.is_some() || config.token_file.is_some(),
         "mpsfsi service listening"

@@ -5,6 +5,7 @@
 use crate::helpers::{fresh_data_dir, long_case, spawn_app, tiny_case, Api, TestApp};
 use crate::pg_server::PgServer;
 use mpsfsi::service::store::{Claimant, JobStatus, JobStore, ATTEMPTS_EXHAUSTED};
+use mpsfsi::service::DatabaseUrl;
 use serde_json::Value;
 use std::collections::{BTreeMap, HashSet};
 use std::path::Path;
@@ -15,7 +16,7 @@ use std::time::{Duration, Instant};
 async fn node(url: &str, tag: &str) -> TestApp {
     let url = url.to_string();
     spawn_app(tag, move |c| {
-        c.database = Some(url);
+        c.database = Some(DatabaseUrl::new(url));
         c.workers = 0;
         c.queue_capacity = 1000;
     })
@@ -271,7 +272,7 @@ async fn a_job_whose_worker_dies_every_time_fails_with_attempts_exhausted() {
 }
 
 #[tokio::test(flavor = "multi_thread", worker_threads = 2)]
-async fn a_delete_on_a_node_stops_the_job_on_a_worker_process_within_a_renewal() {
+async fn a_cancel_on_a_node_stops_the_job_on_a_worker_process_within_a_renewal() {
     let Some(pg) = PgServer::start_or_skip("cancel").await else {
         return;
     };
@@ -285,7 +286,7 @@ async fn a_delete_on_a_node_stops_the_job_on_a_worker_process_within_a_renewal()
     let asked = Instant::now();
     let r = api
         .client
-        .delete(api.url(&format!("/v1/jobs/{id}")))
+        .post(api.url(&format!("/v1/jobs/{id}/cancel")))
         .send()
         .await
         .unwrap();
@@ -293,7 +294,7 @@ async fn a_delete_on_a_node_stops_the_job_on_a_worker_process_within_a_renewal()
     let job = api.wait_finished(&id).await;
     let took = asked.elapsed().as_secs_f64();
     eprintln!(
-        "cancelled {took:.2} s after the DELETE (renewal every {:.2} s)",
+        "cancelled {took:.2} s after the request (renewal every {:.2} s)",
         lease_s / 3.0
     );
     stop(worker);
@@ -343,5 +344,151 @@ async fn a_worker_stopped_with_sigterm_gives_its_job_back_at_once() {
     let rows = load_rows(&loads);
     assert_eq!(rows.len(), 2000);
     assert!(rows.values().all(|&n| n == 1));
+    api.stop().await;
+}
+
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn two_nodes_two_workers_twelve_jobs_and_a_worker_killed_all_succeed_once() {
+    let Some(pg) = PgServer::start_or_skip("twelve").await else {
+        return;
+    };
+    let url = pg.fresh_database().await;
+    let nodes = [node(&url, "pg-12-a").await, node(&url, "pg-12-b").await];
+    let lease_s = 1.5;
+    let mut doomed = worker_process(&url, &fresh_data_dir("pg-12-w1"), lease_s);
+    let survivor = worker_process(&url, &fresh_data_dir("pg-12-w2"), lease_s);
+    let mut ids = Vec::new();
+    for i in 0..12 {
+        ids.push(nodes[i % 2].submit(&tiny_case(0.5)).await);
+    }
+    // kill the first worker while it runs a job that has written loads
+    let marker = format!(":{}", doomed.id());
+    let start = Instant::now();
+    let victim = 'found: loop {
+        for id in &ids {
+            let job = nodes[0].job(id).await;
+            let mine = job["worker"].as_str().is_some_and(|w| w.ends_with(&marker));
+            if job["status"] == "running" && mine && job["progress"]["step"].as_u64() > Some(50) {
+                break 'found id.clone();
+            }
+        }
+        assert!(
+            start.elapsed() < Duration::from_secs(60),
+            "the first worker ran nothing"
+        );
+        tokio::time::sleep(Duration::from_millis(10)).await;
+    };
+    doomed.kill().unwrap();
+    doomed.wait().unwrap();
+
+    for id in &ids {
+        let job = nodes[0]
+            .wait_for(id, Duration::from_secs(120), |j| {
+                j["status"] == "succeeded" || j["status"] == "failed"
+            })
+            .await;
+        assert_eq!(job["status"], "succeeded", "{job}");
+        let expected_attempts = if *id == victim { 2 } else { 1 };
+        assert_eq!(job["attempts"], expected_attempts, "{job}");
+        let (_, _, from_a) = nodes[0].get_csv(&format!("/v1/jobs/{id}/loads")).await;
+        let (_, _, from_b) = nodes[1].get_csv(&format!("/v1/jobs/{id}/loads")).await;
+        assert_eq!(from_a, from_b, "job {id} reads the same on both nodes");
+        let rows = load_rows(&from_a);
+        assert_eq!(rows.len(), 500, "job {id}: 0.5 s at 1 ms");
+        assert!(
+            rows.values().all(|&n| n == 1),
+            "job {id}: a sample appears twice"
+        );
+        assert_eq!(nodes[1].job(id).await["status"], "succeeded");
+    }
+    stop(survivor);
+    let (_, list) = nodes[1]
+        .get_json("/v1/jobs?status=succeeded&limit=100")
+        .await;
+    assert_eq!(list["total"], 12);
+    for n in nodes {
+        n.stop().await;
+    }
+}
+
+#[test]
+fn a_database_url_prints_without_its_password() {
+    let url = DatabaseUrl::new("postgres://mpsfsi:hunter2@db.example:5432/jobs?sslmode=disable");
+    assert_eq!(
+        url.redacted(),
+        "postgres://mpsfsi:***@db.example:5432/jobs?sslmode=disable"
+    );
+    assert_eq!(url.password(), Some("hunter2"));
+    let mut config = mpsfsi::service::Config::for_tests("/tmp/x");
+    config.database = Some(url.clone());
+    assert!(!format!("{config:?}").contains("hunter2"));
+    assert!(!format!("{url}").contains("hunter2"));
+    let param =
+        DatabaseUrl::new("postgres://db.example/jobs?user=a&password=hunter2&sslmode=require");
+    assert_eq!(
+        param.redacted(),
+        "postgres://db.example/jobs?user=a&password=***&sslmode=require"
+    );
+    assert_eq!(param.scrub("x hunter2 y"), "x *** y");
+    let none = DatabaseUrl::new("postgres://mpsfsi@db.example/jobs");
+    assert_eq!(none.redacted(), "postgres://mpsfsi@db.example/jobs");
+    assert_eq!(none.password(), None);
+}
+
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn the_database_password_never_appears_in_logs_errors_or_the_health_route() {
+    let Some(pg) = PgServer::start_or_skip("password").await else {
+        return;
+    };
+    const SECRET: &str = "pw-7f3a9c-never-shown";
+    let url = pg.fresh_database().await;
+    let with_password = url.replacen("postgres@", &format!("postgres:{SECRET}@"), 1);
+    let missing_db = format!(
+        "postgres://postgres:{SECRET}@127.0.0.1:{}/no_such_database",
+        pg.port
+    );
+
+    // a node that cannot open its database: the error names it without the password
+    let out = Command::new(env!("CARGO_BIN_EXE_mpsfsi"))
+        .args([
+            "serve",
+            "--addr",
+            "127.0.0.1:0",
+            "--database",
+            &missing_db,
+            "--data",
+        ])
+        .arg(fresh_data_dir("pg-pw-bad"))
+        .output()
+        .unwrap();
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(!out.status.success());
+    assert!(stderr.contains("no_such_database"), "{stderr}");
+    assert!(stderr.contains("***"), "{stderr}");
+    assert!(!stderr.contains(SECRET), "{stderr}");
+
+    // a worker's log (info level: it names its database) and a node's health route
+    let data = fresh_data_dir("pg-pw-worker");
+    let worker = Command::new(env!("CARGO_BIN_EXE_mpsfsi"))
+        .args(["worker", "--database", &with_password, "--data"])
+        .arg(&data)
+        .stderr(Stdio::piped())
+        .spawn()
+        .unwrap();
+    let api = node(&with_password, "pg-pw-node").await;
+    let id = api.submit(&tiny_case(0.05)).await;
+    let job = api.wait_finished(&id).await;
+    assert_eq!(job["status"], "succeeded", "{job}");
+    let (_, health) = api.get_json("/v1/health").await;
+    assert!(!health.to_string().contains(SECRET), "{health}");
+    assert!(!job.to_string().contains(SECRET), "{job}");
+    let _ = Command::new("kill")
+        .args(["-TERM", &worker.id().to_string()])
+        .status();
+    let out = worker.wait_with_output().unwrap();
+    let log = String::from_utf8_lossy(&out.stderr);
+    assert!(log.contains("mpsfsi worker running"), "{log}");
+    assert!(log.contains("***"), "{log}");
+    assert!(!log.contains(SECRET), "{log}");
     api.stop().await;
 }
