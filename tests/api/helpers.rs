@@ -44,6 +44,15 @@ pub fn fresh_data_dir(tag: &str) -> PathBuf {
     dir
 }
 
+/// A port nothing listens on right now (for a server started as a child process).
+pub fn free_port() -> u16 {
+    std::net::TcpListener::bind("127.0.0.1:0")
+        .unwrap()
+        .local_addr()
+        .unwrap()
+        .port()
+}
+
 pub async fn spawn_app(tag: &str, tweak: impl FnOnce(&mut Config)) -> TestApp {
     spawn_app_on(fresh_data_dir(tag), tweak).await
 }

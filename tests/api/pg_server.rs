@@ -5,6 +5,7 @@
 //! package [`PgServer::start`] returns why, and the test skips, unless
 //! `MPSFSI_REQUIRE_POSTGRES` is set (CI sets it): then it fails.
 
+use crate::helpers::free_port;
 use std::path::{Path, PathBuf};
 use std::process::{Child, Command, Stdio};
 use std::time::{Duration, Instant};
@@ -47,14 +48,6 @@ fn as_postgres(root: bool, program: &Path) -> Command {
     } else {
         Command::new(program)
     }
-}
-
-fn free_port() -> u16 {
-    std::net::TcpListener::bind("127.0.0.1:0")
-        .unwrap()
-        .local_addr()
-        .unwrap()
-        .port()
 }
 
 impl PgServer {

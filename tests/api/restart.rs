@@ -1,7 +1,7 @@
 //! Persistence across restarts: a server process killed (SIGKILL) mid-job, and a graceful
 //! shutdown mid-job, both restarted on the same data directory.
 
-use crate::helpers::{fresh_data_dir, long_case, spawn_app_on, tiny_case, Api};
+use crate::helpers::{free_port, fresh_data_dir, long_case, spawn_app_on, tiny_case, Api};
 use mpsfsi::service::{serve, Config};
 use std::path::Path;
 use std::process::{Child, Command, Stdio};
@@ -23,14 +23,6 @@ fn child_server() {
     let args = <Args as clap::Parser>::parse_from(["child_server"]);
     let runtime = tokio::runtime::Runtime::new().unwrap();
     runtime.block_on(serve(args.config)).unwrap();
-}
-
-fn free_port() -> u16 {
-    std::net::TcpListener::bind("127.0.0.1:0")
-        .unwrap()
-        .local_addr()
-        .unwrap()
-        .port()
 }
 
 /// `mpsfsi serve` when the binary has it, else this test binary's [`child_server`];
