@@ -25,11 +25,17 @@ async fn node(url: &str, tag: &str) -> TestApp {
 
 /// `mpsfsi worker` on `url`, its log in `data/worker.log`.
 fn worker_process(url: &str, data: &Path, lease_s: f64) -> Child {
+    worker_process_with(url, data, lease_s, &[])
+}
+
+/// The same with more flags.
+fn worker_process_with(url: &str, data: &Path, lease_s: f64, flags: &[&str]) -> Child {
     let log = std::fs::File::create(data.join("worker.log")).unwrap();
     Command::new(env!("CARGO_BIN_EXE_mpsfsi"))
         .args(["worker", "--database", url, "--data"])
         .arg(data)
         .args(["--lease-s", &lease_s.to_string()])
+        .args(flags)
         .stdout(Stdio::null())
         .stderr(log)
         .spawn()
@@ -315,15 +321,7 @@ async fn a_worker_stopped_with_sigterm_gives_its_job_back_at_once() {
     let api = node(&url, "pg-term").await;
     let lease_s = 30.0; // long: the job must come back without waiting for it
     let data = fresh_data_dir("pg-term-w1");
-    let log = std::fs::File::create(data.join("worker.log")).unwrap();
-    let mut first = Command::new(env!("CARGO_BIN_EXE_mpsfsi"))
-        .args(["worker", "--database", &url, "--data"])
-        .arg(&data)
-        .args(["--lease-s", "30", "--shutdown-grace-s", "0"])
-        .stdout(Stdio::null())
-        .stderr(log)
-        .spawn()
-        .unwrap();
+    let mut first = worker_process_with(&url, &data, lease_s, &["--shutdown-grace-s", "0"]);
     let id = api.submit(&tiny_case(2.0)).await;
     api.wait_running(&id).await;
     let term = Command::new("kill")
