@@ -477,21 +477,19 @@ async fn get_snapshot_svg(
         .map_err(|e| ApiError::BadRequest(format!("window: {e}")))?;
     let row = find_job(&state, &id).await?;
     let dir = run_dir(&state, &row);
-    let name = row.name.clone();
-    let row = row.clone();
     let svg = tokio::task::spawn_blocking(move || {
         let snapshot = read_snapshot(&dir, query.time).map_err(|e| match e {
             SnapshotError::None if !dir.is_dir() && row.run_dir.is_some() => {
                 ApiError::SnapshotsElsewhere {
                     id,
-                    worker: row.worker.clone().unwrap_or_default(),
-                    dir: row.run_dir.clone().unwrap_or_default(),
+                    worker: row.worker.unwrap_or_default(),
+                    dir: row.run_dir.unwrap_or_default(),
                 }
             }
             SnapshotError::None => ApiError::NoSnapshots(id),
             SnapshotError::Io(e) => ApiError::internal(e),
         })?;
-        flow_svg(&snapshot, field, window, &title(&name, &snapshot))
+        flow_svg(&snapshot, field, window, &title(&row.name, &snapshot))
             .map(|(svg, _)| svg)
             .map_err(|e| match e {
                 PlotError::Data(m) => ApiError::BadRequest(m),
