@@ -175,6 +175,34 @@ pub fn force_coefficient_from_contact(
     Some((slope / scale, error / scale))
 }
 
+/// The force coefficient of a constant-velocity entry as a user reads it from loads.csv
+/// (and as the impact tests do): the onset t0 is the time of the first row whose |F|
+/// exceeds 1 % of the largest |F| of the run, and C the least-squares slope of
+/// F = C rho V³ (t - t0) through that origin over the rows between 20 % and 85 % of
+/// Wagner's chine-wetting time `t_chine` after t0. Rows are taken at their times as
+/// written. The onset absorbs the lag of the first wetted rows, which the keel-contact
+/// origin (`force_coefficient_from_contact`) counts as missing force. Returns (C, t0).
+pub fn force_coefficient_from_onset(
+    times: &[Real],
+    force: &[Real],
+    t_chine: Real,
+    density: Real,
+    speed: Real,
+) -> Option<(Real, Real)> {
+    let peak = force.iter().fold(0.0, |m: Real, f| m.max(f.abs()));
+    let first = force.iter().position(|f| f.abs() > 0.01 * peak)?;
+    let t0 = times[first];
+    let (mut sft, mut stt) = (0.0, 0.0);
+    for (t, f) in times.iter().zip(force) {
+        let s = t - t0;
+        if (0.2 * t_chine..=0.85 * t_chine).contains(&s) {
+            sft += f * s;
+            stt += s * s;
+        }
+    }
+    (stt > 0.0).then(|| (sft / stt / (density * speed.powi(3)), t0))
+}
+
 /// The force coefficient of a constant-velocity entry: fit F = C rho V³ (t - t0) to the
 /// interval-mean force samples (`times[k]` ends the interval of `force[k]`, the first
 /// starting at `start`) whose interval midpoints lie in `window` (for a linear force the

@@ -121,10 +121,11 @@ fn impulsively_started_plate_carries_wagner_added_mass() {
 /// `projection = "exact"` with the default source kinematics: the rows away from the free
 /// surface make the corrected velocity's HS divergence (the wall's virtual points moving
 /// with the plate) the source's, instead of solving the HL Laplacian. Measured at 10 /
-/// 5 / 2.5 mm:
-/// - blend 0.05 (nearly all exact): added mass 0.988 / 0.995 / 1.001, the row under the
-///   plate at 0.977 / 1.006 V;
-/// - the default blend 0.1: 1.003 / 1.014 / 1.021, the row at 1.030 / 1.057 / 1.063 V;
+/// 5 mm (the default `laplacian_fill_floor` 0.5; without it 1.003 / 1.014 and 0.988 /
+/// 0.995):
+/// - blend 0.05 (nearly all exact): added mass 0.983 / 0.990, the row under the plate
+///   at 0.991 / 0.997 V;
+/// - the default blend 0.1: 0.993 / 1.007, the row at 1.012 / 1.057 V;
 /// - the approximate projection: 1.075 / 1.096 / 1.116 and 1.24 / 1.26 / 1.27 V.
 ///
 /// So the approximate projection's excess is the mismatch between its Laplacian and the
@@ -136,7 +137,7 @@ fn impulsively_started_plate_with_exact_projection() {
             r#"scheme.projection="exact""#.to_string(),
             "scheme.exact_projection_blend=0.05".into(),
         ];
-        plate_start(l0, "source", C, &exact).check(l0, 0.015, 0.03);
+        plate_start(l0, "source", C, &exact).check(l0, 0.02, 0.03);
         let default_blend = plate_start(l0, "source", C, &exact[..1]);
         default_blend.check(l0, 0.02, 0.06);
     }

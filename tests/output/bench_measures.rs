@@ -1,6 +1,7 @@
 use mpsfsi::analysis::measure::{
-    exponential_decay_rate, fit_force_coefficient, force_coefficient_from_contact, interpolate,
-    interval_mean_after, oscillation_peaks, surge_front, surge_front_rms_error,
+    exponential_decay_rate, fit_force_coefficient, force_coefficient_from_contact,
+    force_coefficient_from_onset, interpolate, interval_mean_after, oscillation_peaks, surge_front,
+    surge_front_rms_error,
 };
 use mpsfsi::analysis::reference::MARTIN_MOYCE_SURGE;
 use mpsfsi::bench::error_report::{pareto_front, time_to_reach};
@@ -93,6 +94,49 @@ fn the_force_coefficient_fit_recovers_a_linear_force() {
     assert!(
         force_coefficient_from_contact(0.0, 0.0, &times, &force, (1.0, 2.0), rho, v).is_none(),
         "no samples in the window"
+    );
+}
+
+/// The onset reading: a force that is zero until t0 = 0.35 ms and then C rho V³ (t - t0)
+/// gives back C exactly, its onset at the first row above 1 % of the peak; the rows
+/// before the window and a spike after it (which raises the peak and so the 1 % level)
+/// move the onset only where they should.
+#[test]
+fn the_onset_force_coefficient_reads_the_slope_after_the_first_load() {
+    let (c, rho, v, t_chine): (f64, f64, f64, f64) = (14.04, 1000.0, 6.15, 0.0149);
+    let dt = 1e-5;
+    let times: Vec<f64> = (1..=1700).map(|k| k as f64 * dt).collect();
+    let linear = |t: f64| c * rho * v.powi(3) * (t - 3.5e-4).max(0.0);
+    let force: Vec<f64> = times.iter().map(|&t| linear(t)).collect();
+    let (fitted, t0) = force_coefficient_from_onset(&times, &force, t_chine, rho, v).unwrap();
+    // the first row above 1 % of the peak (at 17 ms) is 0.166 ms after 0.35 ms
+    let expected_t0 = times
+        .iter()
+        .copied()
+        .find(|&t| linear(t) > 0.01 * linear(0.017));
+    assert_eq!(Some(t0), expected_t0);
+    // F = C' (t - t0) through the later origin: the least-squares slope over the window
+    let (mut sft, mut stt) = (0.0, 0.0);
+    for &t in &times {
+        let s = t - t0;
+        if (0.2 * t_chine..=0.85 * t_chine).contains(&s) {
+            sft += linear(t) * s;
+            stt += s * s;
+        }
+    }
+    let slope = sft / stt / (rho * v.powi(3));
+    assert!(
+        (fitted - slope).abs() < 1e-12 * c,
+        "{fitted} against {slope}"
+    );
+    assert!(slope > c && slope < 1.03 * c, "{slope}");
+    // a tenfold spike late in the run raises the 1 % level and so the onset
+    let mut spiked = force.clone();
+    spiked[1600] *= 10.0;
+    let (_, late) = force_coefficient_from_onset(&times, &spiked, t_chine, rho, v).unwrap();
+    assert!(late > t0 + 1e-3, "onset {late} against {t0}");
+    assert!(
+        force_coefficient_from_onset(&times, &vec![0.0; times.len()], t_chine, rho, v).is_none()
     );
 }
 
