@@ -203,6 +203,25 @@ pub fn force_coefficient_from_onset(
     (stt > 0.0).then(|| (sft / stt / (density * speed.powi(3)), t0))
 }
 
+/// The per-step scatter of an impact load: the RMS of the row-to-row change of F over
+/// the rows between 20 % and 85 % of `t_chine` after the onset `t0` (the window of
+/// `force_coefficient_from_onset`), divided by the mean F there. Rows are steps when
+/// the load interval is below dt. None with fewer than two rows or a zero mean.
+pub fn step_scatter(times: &[Real], force: &[Real], t0: Real, t_chine: Real) -> Option<Real> {
+    let f: Vec<Real> = times
+        .iter()
+        .zip(force)
+        .filter(|(t, _)| (0.2 * t_chine..=0.85 * t_chine).contains(&(*t - t0)))
+        .map(|(_, f)| *f)
+        .collect();
+    let mean = f.iter().sum::<Real>() / f.len() as Real;
+    if f.len() < 2 || mean == 0.0 {
+        return None;
+    }
+    let ms = f.windows(2).map(|w| (w[1] - w[0]).powi(2)).sum::<Real>() / (f.len() - 1) as Real;
+    Some(ms.sqrt() / mean.abs())
+}
+
 /// The force coefficient of a constant-velocity entry: fit F = C rho V³ (t - t0) to the
 /// interval-mean force samples (`times[k]` ends the interval of `force[k]`, the first
 /// starting at `start`) whose interval midpoints lie in `window` (for a linear force the

@@ -258,8 +258,8 @@ impl PressureProfile {
 /// The default job at its own spacing, as a user writes it (5 mm, B/l0 = 100, no
 /// `scheme` block, the default Courant number, the wedge on the tank's axis; 192 000
 /// particles): C_F read from the onset within 5 % of the similarity solution, with the
-/// origin at the keel contact within 10 % (the first wetted rows lag: the onset is
-/// 0.2 ms later than the similarity force's), and the pressure along the faces,
+/// origin at the keel contact within 10 % (the first wetted rows lag, and it reads
+/// 0.35-0.75 t_chine), and the pressure along the faces,
 /// averaged over the window, within 25 % of its table and 27 % of its peak (6.927: the
 /// jet root is resolved by two or three particles, and the fill floor of the pressure
 /// Laplacian lowers the peak from 5.21 to 5.16). Measured numbers: docs/validation.md.
