@@ -322,8 +322,12 @@ fn wedge_case() -> mpsfsi::case::Case {
     .unwrap()
 }
 
+/// The wedge is scored as users read C_F (from the first row above 1 % of the peak):
+/// the similarity force itself reads a little high, since that row comes after the
+/// contact (here 0.15 ms later at rows of 0.1 ms, +2.2 %), and a force of another
+/// coefficient reads in proportion (the onset does not move when the force is scaled).
 #[test]
-fn the_wedge_score_is_zero_for_the_similarity_force_and_measures_a_wrong_one() {
+fn the_wedge_score_reads_the_similarity_force_from_its_onset_and_measures_a_wrong_one() {
     use mpsfsi::bench::score::{score, Measure, RunOutcome};
     let case = wedge_case();
     let (rho, v): (f64, f64) = (1000.0, 6.15);
@@ -334,30 +338,35 @@ fn the_wedge_score_is_zero_for_the_similarity_force_and_measures_a_wrong_one() {
         simulated_time: 0.02,
         particles: 1000,
     };
-    for (c, expected_error) in [(14.04, 0.0), (23.26, 23.26 / 14.04 - 1.0)] {
-        let dir = crate::scratch_dir(&format!("wedge-score-{c}"));
-        let mut text = String::from("time,body,fx,fy,mz\n");
-        for k in 1..=200 {
-            let t = k as f64 * 1e-4;
-            let mid = t - 0.5e-4;
-            // upward force on the wedge (the motion is downward), junk on the tank
-            let fy = if mid > contact {
-                c * rho * v.powi(3) * (mid - contact)
-            } else {
-                0.0
-            };
-            text.push_str(&format!(
-                "{t:.9e},tank,1e5,-3e5,0\n{t:.9e},wedge,0,{fy:.12e},0\n"
-            ));
-        }
-        std::fs::write(dir.join("loads.csv"), text).unwrap();
-        let s = score(&Measure::Wedge, &case, &dir, &outcome).unwrap();
-        let (error, note) = (s.error, s.note);
-        assert!(
-            (error - expected_error).abs() < 1e-6,
-            "C = {c}: error {error} ({note})"
-        );
-    }
+    let errors: Vec<f64> = [14.04, 23.26_f64]
+        .iter()
+        .map(|&c| {
+            let dir = crate::scratch_dir(&format!("wedge-score-{c}"));
+            let mut text = String::from("time,body,fx,fy,mz\n");
+            for k in 1..=200 {
+                let t = k as f64 * 1e-4;
+                let mid = t - 0.5e-4;
+                // upward force on the wedge (the motion is downward), junk on the tank
+                let fy = if mid > contact {
+                    c * rho * v.powi(3) * (mid - contact)
+                } else {
+                    0.0
+                };
+                text.push_str(&format!(
+                    "{t:.9e},tank,1e5,-3e5,0\n{t:.9e},wedge,0,{fy:.12e},0\n"
+                ));
+            }
+            std::fs::write(dir.join("loads.csv"), text).unwrap();
+            let s = score(&Measure::Wedge, &case, &dir, &outcome).unwrap();
+            // the note gives the keel-contact fit, exact for this force
+            let contact_fit = format!("from the keel contact {c:.2} ± 0.00");
+            assert!(s.note.contains(&contact_fit), "{}", s.note);
+            s.error
+        })
+        .collect();
+    assert!(errors[0] > 0.0 && errors[0] < 0.03, "{}", errors[0]);
+    let ratio = (1.0 + errors[1]) / (1.0 + errors[0]);
+    assert!((ratio - 23.26 / 14.04).abs() < 1e-9, "{ratio}");
 }
 
 #[test]
