@@ -190,9 +190,9 @@ fn user_wedge_10_degrees_with_defaults() {
     assert!(err.abs() < 0.05, "{:+.1} %", 100.0 * err);
 }
 
-/// 25° deadrise: similarity C_F = 23.61. Reads -0.7 % (t0 0.27 ms, per-step scatter 0.51),
-/// 422 steps, 3 minutes on two cores.
+/// 25° deadrise: similarity C_F = 23.61.
 #[test]
+#[ignore = "3 minutes on two cores, kept out of CI for time; passes: -0.7 % (t0 0.27 ms, per-step scatter 0.51)"]
 fn user_wedge_25_degrees_with_defaults() {
     let err = wedge_error(25.0, 23.61);
     assert!(err.abs() < 0.05, "{:+.1} %", 100.0 * err);
