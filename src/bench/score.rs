@@ -10,7 +10,7 @@ use crate::math::Real;
 use crate::output::filter::leading_deadrise;
 use crate::output::loads_csv::{parse_loads_csv, LoadRow};
 use crate::output::snapshots::{PVD_NAME, SNAPSHOT_DIR};
-use crate::output::vtk::{parse_pvd, parse_vtu};
+use crate::output::vtk::{parse_pvd, parse_vtu, PARTICLES_PART};
 use crate::run::{RunStatus, Summary};
 use std::io;
 use std::path::Path;
@@ -341,7 +341,8 @@ fn csv_columns(
     (xs, ys)
 }
 
-/// (T, Z) of the surge front read from the run's VTK snapshots.
+/// (T, Z) of the surge front read from the run's VTK snapshots (their particles part: the
+/// walls part's vertices would read as a front at the tank's far wall).
 pub fn surge_front_history(
     dir: &Path,
     geometry: &ColumnGeometry,
@@ -353,7 +354,7 @@ pub fn surge_front_history(
     let band = (2.0 * l0).max(0.05 * geometry.width);
     let scale = (2.0 * g / geometry.width).sqrt();
     let mut out = Vec::with_capacity(entries.len());
-    for e in entries {
+    for e in entries.into_iter().filter(|e| e.part == PARTICLES_PART) {
         let grid = parse_vtu(&std::fs::read_to_string(snapshots.join(&e.file))?)?;
         let points: Vec<(Real, Real)> = grid.points.iter().map(|p| (p[0], p[1])).collect();
         if let Some(x) = measure::surge_front(&points, geometry.floor, band, l0) {

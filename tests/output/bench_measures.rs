@@ -487,3 +487,82 @@ fn a_variant_changes_its_own_scheme_fields_and_keeps_the_cases_other_settings() 
     assert_eq!(case.scheme.gradient, Scheme::default().gradient);
     assert_eq!(case.time.max_dt, 1.0e-4);
 }
+
+/// The dam break's surge front is read from the particles of each snapshot only: the
+/// walls part written at the same time (the tank outline, whose corner at the far wall
+/// sits on the floor) must not read as a front at Z = 4.
+#[test]
+fn the_surge_front_history_reads_the_particles_part_of_each_snapshot() {
+    use mpsfsi::bench::cases::ColumnGeometry;
+    use mpsfsi::bench::score::surge_front_history;
+    use mpsfsi::math::Vec2;
+    use mpsfsi::output::vtk::{
+        pvd_string, vtu_string, walls_vtu_string, Outline, PvdEntry, VtuFields, PARTICLES_PART,
+        WALLS_PART,
+    };
+    let (a, l0, g): (f64, f64, f64) = (0.146, 0.00365, 9.81);
+    let dir = crate::scratch_dir("surge-front-parts");
+    let snapshots = dir.join("snapshots");
+    std::fs::create_dir_all(&snapshots).unwrap();
+    let tank =
+        [[0.0, 1.2], [0.0, 0.0], [4.0 * a, 0.0], [4.0 * a, 1.2]].map(|p| Vec2::new(p[0], p[1]));
+    let walls = Outline {
+        segments: tank.windows(2).map(|w| [w[0], w[1]]).collect(),
+        velocities: vec![[Vec2::zeros(); 2]; 3],
+        moving: false,
+        speed: 0.0,
+    };
+    let scale = (2.0 * g / a).sqrt();
+    let mut entries = Vec::new();
+    for k in 0..70 {
+        let time = 0.05 * k as f64 / scale;
+        // a layer three particles deep whose leading cell edge follows the table
+        let z = interpolate(&MARTIN_MOYCE_SURGE, time * scale).unwrap_or(1.0);
+        let cells = (z * a / l0).round() as usize;
+        let position: Vec<Vec2> = (0..cells)
+            .flat_map(|i| {
+                (0..3).map(move |j| Vec2::new((i as f64 + 0.5) * l0, (j as f64 + 0.5) * l0))
+            })
+            .collect();
+        let n = position.len();
+        let (velocity, zeros, surface) = (vec![Vec2::zeros(); n], vec![0.0; n], vec![false; n]);
+        let fields = VtuFields {
+            position: &position,
+            velocity: &velocity,
+            pressure: &zeros,
+            number_density: &zeros,
+            n0: None,
+            free_surface: &surface,
+            density: None,
+            spacing: Some(l0),
+        };
+        let (p, w) = (format!("step_{k:06}.vtu"), format!("walls_{k:06}.vtu"));
+        std::fs::write(snapshots.join(&p), vtu_string(&fields, time)).unwrap();
+        std::fs::write(
+            snapshots.join(&w),
+            walls_vtu_string(std::slice::from_ref(&walls), time),
+        )
+        .unwrap();
+        entries.push(PvdEntry {
+            time,
+            file: p,
+            part: PARTICLES_PART,
+        });
+        entries.push(PvdEntry {
+            time,
+            file: w,
+            part: WALLS_PART,
+        });
+    }
+    std::fs::write(snapshots.join("run.pvd"), pvd_string(&entries)).unwrap();
+    let geometry = ColumnGeometry {
+        width: a,
+        left: 0.0,
+        floor: 0.0,
+    };
+    let front = surge_front_history(&dir, &geometry, l0, g).unwrap();
+    assert_eq!(front.len(), 70, "one front per time");
+    // the layer's edge is the table rounded to a cell: within l0 / (2 a) = 1.3 % of Z >= 1
+    let error = surge_front_rms_error(&front).unwrap();
+    assert!(error < 0.013, "RMS front error {error}");
+}
