@@ -72,6 +72,10 @@ pub struct Summary {
     pub reason: Option<String>,
     pub case: String,
     pub steps: u64,
+    /// Particle updates of the steps taken (the sum over steps of the fluid particles):
+    /// the run's cost in a unit that does not depend on the machine.
+    #[serde(default)]
+    pub particle_steps: u64,
     pub simulated_time: Real,
     pub end_time: Real,
     pub wall_time_s: f64,
@@ -251,6 +255,7 @@ pub fn run_case(
         reason,
         case: case.name.clone(),
         steps: sim.steps,
+        particle_steps: sim.stats.particle_steps,
         simulated_time: sim.time,
         end_time: end,
         wall_time_s: started.elapsed().as_secs_f64(),

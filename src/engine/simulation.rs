@@ -130,6 +130,9 @@ pub struct RunStatistics {
     pub total_solver_iterations: u64,
     /// Attempted steps the step guard turned down (each repeated with a shorter dt).
     pub rejected_steps: u64,
+    /// Particle updates of the steps taken: the sum over steps of the fluid particles
+    /// at the start of each (a step turned down and repeated counts once).
+    pub particle_steps: u64,
 }
 
 /// One simulation: its configuration (fixed for the run), its state (particles, walls,

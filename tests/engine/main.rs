@@ -8,5 +8,6 @@ mod impact_defaults;
 mod kernels;
 mod lattice;
 mod neighbors;
+mod statistics;
 mod wall_pressure;
 mod walls;

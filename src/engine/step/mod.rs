@@ -197,6 +197,7 @@ fn step<K: Kernel>(
         }
         sim.time += dt;
         sim.steps += 1;
+        sim.stats.particle_steps += sim.particles.len() as u64;
         sim.acceleration_dt = bookkeeping::acceleration_limited_dt(sim, dt);
         sim.stats.total_solver_iterations += iterations as u64;
         let removed =
