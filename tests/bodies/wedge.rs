@@ -307,7 +307,12 @@ pub fn wedge_ensemble(l0: f64, members: usize, extra: &[String]) -> (f64, f64, V
                 format!("bodies.0.position=[{shift},0.0]"),
             ];
             o.extend(extra.iter().cloned());
-            wedge_fit(&o).c
+            let fit = wedge_fit(&o);
+            println!(
+                "l0 = {l0}, shift {shift:.5} m: C_F {:.3} from the keel contact, {:.3} from the onset",
+                fit.c, fit.c_onset
+            );
+            fit.c
         })
         .collect();
     let n = values.len() as f64;
