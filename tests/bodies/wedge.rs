@@ -294,14 +294,17 @@ fn wedge_force_and_pressure_at_default_spacing() {
     }
 }
 
-/// C_F averaged over `members` runs with the wedge shifted across the lattice by
-/// (k + 1/2) l0 / (2 members) (k = 0..members): each run is an independent draw of the
-/// per-step force noise, so the ensemble's standard error is the spread of the members
-/// over sqrt(members). Returns (mean, standard error, members' values).
+/// C_F averaged over `members` runs with the wedge's axis at (1/8 + (k + 1/2) / (8 members))
+/// l0 from the nearest mirror line of the lattice (k = 0..members). The scene moves an axis
+/// closer than l0/8 to a line out to l0/8 (`engine::scene::MIRROR_CLEARANCE`), and an
+/// axis at d and at l0/2 - d are mirror images, so [l0/8, l0/4] holds every distinct
+/// arrangement. Each run is an independent draw of the per-step force noise, so the
+/// ensemble's standard error is the spread of the members over sqrt(members). Returns
+/// (mean, standard error, members' values).
 pub fn wedge_ensemble(l0: f64, members: usize, extra: &[String]) -> (f64, f64, Vec<f64>) {
     let values: Vec<f64> = (0..members)
         .map(|k| {
-            let shift = 0.5 * l0 * (k as f64 + 0.5) / members as f64;
+            let shift = l0 * (0.125 + 0.125 * (k as f64 + 0.5) / members as f64);
             let mut o = vec![
                 format!("particle_spacing={l0}"),
                 format!("bodies.0.position=[{shift},0.0]"),
