@@ -12,7 +12,7 @@ use std::io;
 use std::path::Path;
 
 pub const RESULTS_HEADER: &str =
-    "case,variant,spacing,particles,steps,wall_time_s,error,error_measure,error2,error2_measure,mean_solver_iterations,status,note";
+    "case,variant,spacing,particles,steps,particle_steps,wall_time_s,error,error_measure,error2,error2_measure,mean_solver_iterations,status,note";
 
 /// Write `results.csv` (rewritten after every run, so a long benchmark can be read while it runs).
 pub fn write_results_csv(path: &Path, results: &[BenchResult]) -> io::Result<()> {
@@ -21,12 +21,13 @@ pub fn write_results_csv(path: &Path, results: &[BenchResult]) -> io::Result<()>
     for r in results {
         let _ = writeln!(
             out,
-            "{},{},{},{},{},{:.4},{:.6e},{},{:.6e},{},{:.2},{},{}",
+            "{},{},{},{},{},{},{:.4},{:.6e},{},{:.6e},{},{:.2},{},{}",
             csv_field(&r.case),
             csv_field(&r.variant),
             r.spacing,
             r.particles,
             r.steps,
+            r.particle_steps,
             r.wall_time_s,
             r.error,
             csv_field(&r.error_measure),
@@ -121,20 +122,21 @@ pub fn write_report(
                 .map(|m| format!(" Second error: {m}."))
                 .unwrap_or_default()
         );
-        let _ = writeln!(md, "| variant | spacing (m) | particles | steps | wall time (s) | error | {}status | note |", if measure2.is_some() { "error 2 | " } else { "" });
+        let _ = writeln!(md, "| variant | spacing (m) | particles | steps | particle-steps | wall time (s) | error | {}status | note |", if measure2.is_some() { "error 2 | " } else { "" });
         let _ = writeln!(
             md,
-            "| --- | ---: | ---: | ---: | ---: | ---: | {}--- | --- |",
+            "| --- | ---: | ---: | ---: | ---: | ---: | ---: | {}--- | --- |",
             if measure2.is_some() { "---: | " } else { "" }
         );
         for r in &rows {
             let _ = writeln!(
                 md,
-                "| {} | {:.5} | {} | {} | {:.2} | {} | {}{} | {} |",
+                "| {} | {:.5} | {} | {} | {:.1} M | {:.2} | {} | {}{} | {} |",
                 r.variant,
                 r.spacing,
                 r.particles,
                 r.steps,
+                r.particle_steps as Real / 1e6,
                 r.wall_time_s,
                 md_percent(r.error),
                 if measure2.is_some() {

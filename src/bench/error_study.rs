@@ -85,6 +85,8 @@ pub struct BenchResult {
     pub spacing: Real,
     pub particles: usize,
     pub steps: u64,
+    /// Particle updates of the run (`summary.json`'s `particle_steps`).
+    pub particle_steps: u64,
     pub wall_time_s: f64,
     /// The case's primary error measure (NaN when the run failed or could not be measured).
     pub error: Real,
@@ -234,6 +236,7 @@ pub fn run_one(
         spacing,
         particles: 0,
         steps: 0,
+        particle_steps: 0,
         wall_time_s: Real::NAN,
         error: Real::NAN,
         error_measure: String::new(),
@@ -271,6 +274,7 @@ pub fn run_one(
     };
     result.particles = summary.particles;
     result.steps = summary.steps;
+    result.particle_steps = summary.particle_steps;
     result.wall_time_s = summary.wall_time_s;
     result.mean_solver_iterations = summary.mean_solver_iterations;
     result.status = match summary.status {

@@ -156,6 +156,7 @@ fn result(variant: &str, wall: f64, error: f64) -> BenchResult {
         spacing: 0.01,
         particles: 1,
         steps: 1,
+        particle_steps: 1,
         wall_time_s: wall,
         error,
         error_measure: String::new(),
@@ -565,4 +566,22 @@ fn the_surge_front_history_reads_the_particles_part_of_each_snapshot() {
     // the layer's edge is the table rounded to a cell: within l0 / (2 a) = 1.3 % of Z >= 1
     let error = surge_front_rms_error(&front).unwrap();
     assert!(error < 0.013, "RMS front error {error}");
+}
+
+/// results.csv carries each run's particle-steps, the machine-independent cost the
+/// time-against-accuracy front is also drawn in, under a named column.
+#[test]
+fn results_csv_names_the_particle_steps_of_each_run() {
+    use mpsfsi::bench::error_report::write_results_csv;
+    let mut r = result("default", 2.5, 0.01);
+    (r.particles, r.steps, r.particle_steps) = (1000, 300, 299_500);
+    let path = crate::scratch_dir("results-csv").join("results.csv");
+    write_results_csv(&path, &[r]).unwrap();
+    let mut reader = csv::Reader::from_path(&path).unwrap();
+    let headers = reader.headers().unwrap().clone();
+    let row = reader.records().next().unwrap().unwrap();
+    let column = |name: &str| &row[headers.iter().position(|h| h == name).unwrap()];
+    assert_eq!(column("particle_steps"), "299500");
+    assert_eq!(column("steps"), "300");
+    assert_eq!(column("wall_time_s"), "2.5000");
 }
