@@ -175,6 +175,15 @@ pub fn force_coefficient_from_contact(
     Some((slope / scale, error / scale))
 }
 
+/// The rows a user's C_F is fitted over: from 20 % to 85 % of `t_chine` after the onset
+/// t0 (`force_coefficient_from_onset`, `step_scatter`), as fractions of `t_chine`.
+pub const ONSET_FIT_WINDOW: (Real, Real) = (0.2, 0.85);
+
+/// Is a row `s` seconds after the onset inside [`ONSET_FIT_WINDOW`]?
+fn in_onset_window(s: Real, t_chine: Real) -> bool {
+    (ONSET_FIT_WINDOW.0 * t_chine..=ONSET_FIT_WINDOW.1 * t_chine).contains(&s)
+}
+
 /// The force coefficient of a constant-velocity entry as a user reads it from loads.csv
 /// (and as the impact tests do): the onset t0 is the time of the first row whose |F|
 /// exceeds 1 % of the largest |F| of the run, and C the least-squares slope of
@@ -195,7 +204,7 @@ pub fn force_coefficient_from_onset(
     let (mut sft, mut stt) = (0.0, 0.0);
     for (t, f) in times.iter().zip(force) {
         let s = t - t0;
-        if (0.2 * t_chine..=0.85 * t_chine).contains(&s) {
+        if in_onset_window(s, t_chine) {
             sft += f * s;
             stt += s * s;
         }
@@ -211,7 +220,7 @@ pub fn step_scatter(times: &[Real], force: &[Real], t0: Real, t_chine: Real) -> 
     let f: Vec<Real> = times
         .iter()
         .zip(force)
-        .filter(|(t, _)| (0.2 * t_chine..=0.85 * t_chine).contains(&(*t - t0)))
+        .filter(|(t, _)| in_onset_window(*t - t0, t_chine))
         .map(|(_, f)| *f)
         .collect();
     let mean = f.iter().sum::<Real>() / f.len() as Real;

@@ -220,7 +220,7 @@ fn score_wedge(case: &Case, dir: &Path) -> io::Result<Score> {
     // the product's reading (README, docs/validation.md): from the first load above 1 %
     // of the peak, over 20-85 % of t_chine after it
     let onset = measure::force_coefficient_from_onset(&times, &force, t_chine, rho, speed)
-        .filter(|(_, t0)| last >= t0 + 0.85 * t_chine);
+        .filter(|(_, t0)| last >= t0 + measure::ONSET_FIT_WINDOW.1 * t_chine);
     let from_contact =
         measure::force_coefficient_from_contact(contact, start, &times, &force, window, rho, speed)
             .filter(|_| last >= window.1);
