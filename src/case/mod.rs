@@ -5,11 +5,13 @@
 //! silently ignored.
 
 mod load;
+mod refinement;
 pub mod schema;
 mod scheme;
 mod validate;
 
 pub use load::{apply_override, load_case_file, parse_case_str, parse_case_value};
+pub use refinement::{Refinement, RefinementRegions};
 pub use scheme::*;
 pub use validate::{estimated_particles, validate, Limits, MAX_VERTICES};
 
@@ -73,9 +75,15 @@ pub struct Case {
     pub particle_spacing: f64,
     /// Particles leaving this box are removed and counted.
     pub domain: Domain,
-    /// Polygons filled with fluid particles on a square lattice of `particle_spacing`.
+    /// Polygons filled with fluid particles on a square lattice of `particle_spacing`
+    /// (twice as coarse where `refinement` allows).
     #[schemars(extend("minItems" = 1))]
     pub fluid_blocks: Vec<FluidBlock>,
+    /// Where the fluid may be laid out coarser than `particle_spacing`: "none" (one
+    /// spacing, the default), "auto" (fine around each moving body's path, twice as
+    /// coarse elsewhere) or {"fine": [boxes]}.
+    #[serde(default, skip_serializing_if = "Refinement::is_none")]
+    pub refinement: Refinement,
     /// Fixed walls (open or closed polylines).
     #[serde(default)]
     pub walls: Vec<Wall>,

@@ -285,6 +285,8 @@ pub struct Config {
     /// The case's scheme block as resolved (what summary.json reports).
     pub scheme: Scheme,
     pub control: StepControl,
+    /// The layout has more than one spacing (`Particles::scale`, `resolution`).
+    pub multi_resolution: bool,
 }
 
 impl Config {
@@ -325,6 +327,7 @@ impl Config {
                     as usize,
                 damping: case.damping_zones.iter().map(DampingLayer::new).collect(),
             },
+            multi_resolution: false,
         }
     }
 }

@@ -8,6 +8,8 @@ pub mod operators;
 pub mod params;
 pub mod particles;
 pub mod pressure;
+pub mod refinement;
+pub mod resolution;
 pub mod scene;
 pub mod simulation;
 pub mod step;

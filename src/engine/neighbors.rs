@@ -3,6 +3,7 @@
 //! fixed chunks of particles and concatenated in order, so the list (and every
 //! sum over it) is the same whatever the number of threads.
 
+use super::resolution::Scales;
 use crate::math::{Real, Vec2};
 use rayon::prelude::*;
 
@@ -116,20 +117,55 @@ impl NeighborList {
     pub fn build(positions: &[Vec2], radius: Real) -> Self {
         let grid = CellGrid::build(positions, radius);
         let r2 = radius * radius;
-        let n = positions.len();
+        Self::from_rows(positions.len(), grid, radius, |i, grid, idx| {
+            let xi = positions[i];
+            grid.for_each_near(xi, 1, |j| {
+                if j != i && (positions[j] - xi).norm_squared() < r2 {
+                    idx.push(j as u32);
+                }
+            });
+        })
+    }
+
+    /// With multi-resolution scales: the neighbours j of i with |x_j - x_i| < radius
+    /// s_ij (the pair radius of `resolution`, symmetric). The cells are those of the
+    /// finest radius; a particle searches as many cells out as its largest pair radius
+    /// needs. Uniform scales give [`Self::build`]'s list.
+    pub fn build_scaled(positions: &[Vec2], radius: Real, scales: Scales) -> Self {
+        if scales.is_uniform() {
+            return Self::build(positions, radius);
+        }
+        let (s_min, s_max) = scales.range();
+        let cell = radius * s_min;
+        let grid = CellGrid::build(positions, cell);
+        Self::from_rows(positions.len(), grid, radius, |i, grid, idx| {
+            let xi = positions[i];
+            let reach = (0.5 * (scales.of(i) + s_max) * radius / cell - 1e-9).ceil() as isize;
+            grid.for_each_near(xi, reach.max(1), |j| {
+                let rj = radius * scales.pair(i, j).0;
+                if j != i && (positions[j] - xi).norm_squared() < rj * rj {
+                    idx.push(j as u32);
+                }
+            });
+        })
+    }
+
+    /// The list whose row i `row(i, grid, out)` appends, built over fixed chunks in
+    /// parallel and concatenated in order.
+    fn from_rows(
+        n: usize,
+        grid: CellGrid,
+        radius: Real,
+        row: impl Fn(usize, &CellGrid, &mut Vec<u32>) + Sync,
+    ) -> Self {
         let chunks: Vec<(Vec<u32>, Vec<u32>)> = (0..n.div_ceil(CHUNK))
             .into_par_iter()
             .map(|c| {
                 let mut counts = Vec::with_capacity(CHUNK);
                 let mut idx = Vec::with_capacity(CHUNK * 24);
                 for i in c * CHUNK..((c + 1) * CHUNK).min(n) {
-                    let xi = positions[i];
                     let before = idx.len();
-                    grid.for_each_near(xi, 1, |j| {
-                        if j != i && (positions[j] - xi).norm_squared() < r2 {
-                            idx.push(j as u32);
-                        }
-                    });
+                    row(i, &grid, &mut idx);
                     counts.push((idx.len() - before) as u32);
                 }
                 (counts, idx)

@@ -13,6 +13,8 @@ pub struct Particles {
     pub number_density_rate: Vec<Real>,
     /// Dirichlet (free-surface) flag of the last pressure solve.
     pub free_surface: Vec<bool>,
+    /// Spacing as a multiple of l0 (1 everywhere in a uniform layout; see `resolution`).
+    pub scale: Vec<Real>,
 }
 
 impl Particles {
@@ -25,6 +27,7 @@ impl Particles {
             number_density: vec![0.0; n],
             number_density_rate: vec![0.0; n],
             free_surface: vec![false; n],
+            scale: vec![1.0; n],
         }
     }
 
@@ -54,5 +57,6 @@ impl Particles {
         filter(&mut self.number_density, keep);
         filter(&mut self.number_density_rate, keep);
         filter(&mut self.free_surface, keep);
+        filter(&mut self.scale, keep);
     }
 }

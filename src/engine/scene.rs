@@ -189,8 +189,19 @@ pub fn build_scene(case: &Case, params: &MpsParameters) -> Scene {
         pos.push(p);
         vel.push(v);
     }
+    // 4. multi-resolution: 2 × 2 sites merged outside the fine boxes
+    let particles = match super::refinement::fine_boxes(case) {
+        None => Particles::with_positions(pos, vel),
+        Some(boxes) => {
+            let (pos, vel, scale) =
+                super::refinement::coarsen(pos.into_iter().zip(vel).collect(), l0, &boxes);
+            let mut particles = Particles::with_positions(pos, vel);
+            particles.scale = scale;
+            particles
+        }
+    };
     Scene {
-        particles: Particles::with_positions(pos, vel),
+        particles,
         walls,
         domain_min: vec2(case.domain.min),
         domain_max: vec2(case.domain.max),

@@ -4,6 +4,7 @@
 use super::config::Config;
 use super::params::MpsParameters;
 use super::particles::Particles;
+use super::resolution::Scales;
 use super::scene::{build_scene, Scene};
 use super::walls::WallObject;
 use super::workspace::Workspace;
@@ -179,6 +180,8 @@ impl Simulation {
             particles.len(),
             fastest,
         );
+        let mut config = config;
+        config.multi_resolution = particles.scale.iter().any(|&s| s != 1.0);
         let n_walls = walls.len();
         let mut sim = Self {
             config,
@@ -193,6 +196,11 @@ impl Simulation {
         };
         sim.initialize();
         sim
+    }
+
+    /// The particles' spacing multiples, uniform unless the layout has several levels.
+    pub fn scales(&self) -> Scales<'_> {
+        Scales::new(&self.particles.scale, self.config.multi_resolution)
     }
 
     /// Number of fluid particles now.
@@ -212,8 +220,16 @@ impl Simulation {
         let m = self.config.params.particle_mass;
         let g = vec2(self.config.params.gravity);
         let p = &self.particles;
-        let kinetic: Real = p.velocity.iter().map(|u| u.norm_squared()).sum::<Real>() * 0.5 * m;
-        let potential: Real = -p.position.iter().map(|x| g.dot(x)).sum::<Real>() * m;
+        let s = self.scales();
+        let kinetic: Real = (0..p.len())
+            .map(|i| p.velocity[i].norm_squared() * s.volume(i))
+            .sum::<Real>()
+            * 0.5
+            * m;
+        let potential: Real = -(0..p.len())
+            .map(|i| g.dot(&p.position[i]) * s.volume(i))
+            .sum::<Real>()
+            * m;
         (kinetic, potential)
     }
 

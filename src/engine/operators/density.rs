@@ -6,13 +6,16 @@ use super::Cloud;
 use crate::engine::kernel::Kernel;
 use crate::math::Real;
 
-/// n_i over the fluid neighbours (w vanishes at and beyond r_e).
+/// n_i over the fluid neighbours (w vanishes at and beyond r_e); with multi-resolution
+/// Σ_j w(r_ij, r_e s_ij) v_ij (`resolution`).
 #[inline]
 pub fn number_density<K: Kernel>(cloud: &Cloud, i: usize) -> Real {
-    let (x, re) = (cloud.positions, cloud.re);
+    let x = cloud.positions;
     let mut n = 0.0;
     for &j in cloud.neighbors.of(i) {
-        n += K::w((x[j as usize] - x[i]).norm(), re);
+        let j = j as usize;
+        let (re, v) = cloud.pair(i, j);
+        n += K::w((x[j] - x[i]).norm(), re) * v;
     }
     n
 }

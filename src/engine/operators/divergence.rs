@@ -36,7 +36,7 @@ pub fn divergence<K: Kernel>(
 /// the divergence of x is d on the lattice. The fluid part only: a wall adds its own
 /// (`WallContacts::add_divergence`).
 pub fn hs_divergence<K: Kernel>(cloud: &Cloud, u: &[Vec2], c: Real) -> Vec<Real> {
-    let (x, nb, re) = (cloud.positions, cloud.neighbors, cloud.re);
+    let (x, nb) = (cloud.positions, cloud.neighbors);
     (0..x.len())
         .into_par_iter()
         .map(|i| {
@@ -45,8 +45,9 @@ pub fn hs_divergence<K: Kernel>(cloud: &Cloud, u: &[Vec2], c: Real) -> Vec<Real>
                 let j = j as usize;
                 let r = x[j] - x[i];
                 let d = r.norm();
+                let (re, v) = cloud.pair(i, j);
                 if d > 0.0 && d < re {
-                    s += K::dw(d, re) * r.dot(&(u[j] - u[i])) / d;
+                    s += K::dw(d, re) * r.dot(&(u[j] - u[i])) / d * v;
                 }
             }
             -c * s

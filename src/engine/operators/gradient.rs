@@ -45,12 +45,12 @@ pub fn corrected_gradient_matrix(moment: &Mat2, n0: Real, dim: Real) -> Option<M
 /// reference value, Koshizuka & Oka 1996).
 #[inline]
 pub fn minimum_over_neighbourhood(cloud: &Cloud, f: &[Real], i: usize) -> Real {
-    let (x, re) = (cloud.positions, cloud.re);
+    let x = cloud.positions;
     cloud
         .neighbors
         .of(i)
         .iter()
-        .filter(|&&j| (x[j as usize] - x[i]).norm() < re)
+        .filter(|&&j| (x[j as usize] - x[i]).norm() < cloud.pair(i, j as usize).0)
         .map(|&j| f[j as usize])
         .fold(f[i], Real::min)
 }
@@ -183,7 +183,8 @@ pub struct PressureGradient {
     pub n0: Real,
     pub dim: Real,
     /// κ of the corrected gradient's repulsive term and the pair distance below which it
-    /// acts (`scheme.gradient_stabilization`, `scheme.stabilization_distance`).
+    /// acts (`scheme.gradient_stabilization`, `scheme.stabilization_distance`; times s_ij
+    /// with multi-resolution).
     pub stabilization: Real,
     pub close: Real,
 }
@@ -206,7 +207,7 @@ pub fn pressure_gradient<K: Kernel>(
     i: usize,
     walls: impl Iterator<Item = VirtualPoints>,
 ) -> Vec2 {
-    let (x, re) = (cloud.positions, cloud.re);
+    let x = cloud.positions;
     let cmps = g.kind == GradientKind::Cmps;
     let (mut s_fluid, mut s_min, mut s_sym) = (Vec2::zeros(), Vec2::zeros(), Vec2::zeros());
     let mut s_close = Vec2::zeros();
@@ -216,13 +217,14 @@ pub fn pressure_gradient<K: Kernel>(
         let r = x[j] - x[i];
         let d2 = r.norm_squared();
         let d = d2.sqrt();
+        let (re, v) = cloud.pair(i, j);
         if d >= re || d == 0.0 {
             continue;
         }
-        let w = K::w(d, re) / d2;
+        let w = K::w(d, re) / d2 * v;
         s_fluid += r * ((p[j] - p[i]) * w);
         s_min += r * ((p[j] - p_min[i]) * w);
-        if d < g.close {
+        if d < g.close * cloud.scales.pair(i, j).0 {
             s_close += r * w;
         }
         s_sym += if cmps {

@@ -81,9 +81,9 @@ pub fn for_each_lattice_coefficient<K: Kernel>(
     visit: impl FnMut(usize, Vec2, Real),
 ) {
     if classic {
-        lattice_row(cloud, i, |d| K::w(d, cloud.re), a, scale, visit)
+        lattice_row(cloud, i, K::w, a, scale, visit)
     } else {
-        lattice_row(cloud, i, |d| K::hl(d, cloud.re), a, scale, visit)
+        lattice_row(cloud, i, K::hl, a, scale, visit)
     }
 }
 
@@ -91,7 +91,7 @@ pub fn for_each_lattice_coefficient<K: Kernel>(
 fn lattice_row(
     cloud: &Cloud,
     i: usize,
-    weight: impl Fn(Real) -> Real,
+    weight: impl Fn(Real, Real) -> Real,
     a: Real,
     scale: impl Fn(usize) -> Real,
     mut visit: impl FnMut(usize, Vec2, Real),
@@ -100,7 +100,9 @@ fn lattice_row(
     for &j in cloud.neighbors.of(i) {
         let j = j as usize;
         let r = x[j] - x[i];
-        let c = a * weight(r.norm()) * scale(j);
+        // with multi-resolution the pair's radius and volume factor (`resolution`)
+        let (re, v) = cloud.pair(i, j);
+        let c = a * weight(r.norm(), re) * scale(j) * v;
         if c != 0.0 {
             visit(j, r, c);
         }

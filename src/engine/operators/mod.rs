@@ -36,6 +36,7 @@ pub use second_derivatives::{
 };
 
 use super::neighbors::NeighborList;
+use super::resolution::Scales;
 use crate::math::{Real, Vec2};
 
 /// The particle cloud an operator acts on. The neighbour list may have been built with a
@@ -49,6 +50,10 @@ pub struct Cloud<'a> {
     /// Dimension d: 2 for the engine, 1 for the one-dimensional paper tests (points on
     /// the x axis).
     pub dim: Real,
+    /// Multi-resolution spacings: the step's operators (number density, HS divergence,
+    /// the lattice Laplacian rows, the pressure gradient) take each pair's radius and
+    /// volume factor from them; the other operators are single-resolution.
+    pub scales: Scales<'a>,
 }
 
 impl<'a> Cloud<'a> {
@@ -58,7 +63,13 @@ impl<'a> Cloud<'a> {
             neighbors,
             re,
             dim: 2.0,
+            scales: Scales::UNIFORM,
         }
+    }
+
+    /// The same cloud with multi-resolution spacings.
+    pub fn with_scales(self, scales: Scales<'a>) -> Self {
+        Self { scales, ..self }
     }
 
     pub fn one_dimensional(positions: &'a [Vec2], neighbors: &'a NeighborList, re: Real) -> Self {
@@ -67,6 +78,7 @@ impl<'a> Cloud<'a> {
             neighbors,
             re,
             dim: 1.0,
+            scales: Scales::UNIFORM,
         }
     }
 
@@ -76,6 +88,13 @@ impl<'a> Cloud<'a> {
 
     pub fn is_empty(&self) -> bool {
         self.positions.is_empty()
+    }
+
+    /// (r_e of the pair, volume factor v_ij): see `resolution`.
+    #[inline]
+    pub(crate) fn pair(&self, i: usize, j: usize) -> (Real, Real) {
+        let (s, v) = self.scales.pair(i, j);
+        (self.re * s, v)
     }
 
     /// (j, r_ij, r) for the neighbours of i strictly inside r_e, in list order.

@@ -21,7 +21,7 @@ pub(super) fn pressure_gradients<K: Kernel>(sim: &Simulation) -> Vec<Vec2> {
     let p = &sim.particles.pressure;
     let nb = &sim.workspace.neighbors;
     let n = x.len();
-    let cloud = Cloud::new(x, nb, re);
+    let cloud = Cloud::new(x, nb, re).with_scales(sim.scales());
     // minimum pressure over each neighbourhood (stability of the classic gradient)
     let p_min: Vec<Real> = (0..n)
         .into_par_iter()
@@ -113,12 +113,13 @@ pub(super) fn correct_velocity_and_position<K: Kernel>(
     // Σ_k (p_i + p_k) r w / r² — a pressure integral over the wall through the MPS wall
     // operator, whose sum over a still tank is the fluid's weight.
     let reaction = sim.config.method.wall_load == WallLoadKind::Reaction;
+    let scales = sim.scales();
     for i in (0..n).filter(|_| reaction) {
         let base = contacts.offsets[i] as usize;
         for (k, c) in contacts.of(i).iter().enumerate() {
             let gw = (c.terms.moment1 * (2.0 * p[i]) + c.terms.moment2_times(neumann[base + k]))
                 * c_grad;
-            let f = gw * (m / rho);
+            let f = gw * (m * scales.volume(i) / rho);
             let load = &mut loads[c.object as usize];
             load.pressure_force += f;
             load.moment += moment_about(walls[c.object as usize].state.center_of_mass, c.point, f);

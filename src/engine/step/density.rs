@@ -6,15 +6,17 @@ use crate::case::WallKinematics;
 use crate::engine::kernel::Kernel;
 use crate::engine::neighbors::NeighborList;
 use crate::engine::operators::{self, hs_divergence, Cloud};
-use crate::engine::params::MpsParameters;
+use crate::engine::resolution::Scales;
 use crate::engine::simulation::Simulation;
 use crate::engine::walls::WallContacts;
 use crate::math::{Real, Vec2};
 use rayon::prelude::*;
 
-/// The neighbour list at `x`, out to the larger of the two radii.
-pub(super) fn neighbor_list(params: &MpsParameters, x: &[Vec2]) -> NeighborList {
-    NeighborList::build(x, params.re.max(params.re_lap))
+/// The neighbour list at `x`, out to the larger of the two radii (of each pair, with
+/// multi-resolution).
+pub(super) fn neighbor_list(sim: &Simulation, x: &[Vec2]) -> NeighborList {
+    let params = &sim.config.params;
+    NeighborList::build_scaled(x, params.re.max(params.re_lap), sim.scales())
 }
 
 /// n and ∇·u of the current state (before the first step).
@@ -23,7 +25,8 @@ pub(super) fn initial_number_density_and_divergence<K: Kernel>(sim: &mut Simulat
         &sim.particles.position,
         &sim.workspace.neighbors,
         sim.config.params.re,
-    );
+    )
+    .with_scales(sim.scales());
     let n = number_density::<K>(&cloud, &sim.workspace.contacts);
     let div = hs_divergence::<K>(
         &cloud,
@@ -44,11 +47,13 @@ fn number_density<K: Kernel>(cloud: &Cloud, contacts: &WallContacts) -> Vec<Real
 
 /// n* at the predicted positions.
 pub(super) fn compute_number_density<K: Kernel>(sim: &mut Simulation) {
+    let scales = Scales::new(&sim.particles.scale, sim.config.multi_resolution);
     let cloud = Cloud::new(
         &sim.workspace.scratch.x_star,
         &sim.workspace.neighbors,
         sim.config.params.re,
-    );
+    )
+    .with_scales(scales);
     sim.workspace.scratch.n_star = number_density::<K>(&cloud, &sim.workspace.contacts);
 }
 
@@ -75,7 +80,8 @@ pub(super) fn divergence<K: Kernel>(
 /// of n carried from x* to the corrected positions to first order.
 pub(super) fn update_number_density_and_divergence<K: Kernel>(sim: &mut Simulation) {
     let (x, xs) = (&sim.particles.position, &sim.workspace.scratch.x_star);
-    let cloud = Cloud::new(x, &sim.workspace.neighbors, sim.config.params.re);
+    let cloud = Cloud::new(x, &sim.workspace.neighbors, sim.config.params.re)
+        .with_scales(sim.scales());
     let contacts = &sim.workspace.contacts;
     let n: Vec<Real> = (0..x.len())
         .into_par_iter()

@@ -5,6 +5,7 @@ use super::walls::KernelWeights;
 use crate::case::ViscosityKind;
 use crate::engine::kernel::Kernel;
 use crate::engine::params::DIM;
+use crate::engine::resolution::Scales;
 use crate::engine::simulation::{Simulation, WallLoad};
 use crate::math::{vec2, Real, Vec2};
 use rayon::prelude::*;
@@ -34,6 +35,7 @@ pub(super) fn apply_explicit_forces<K: Kernel>(
     let (nb, contacts) = (&sim.workspace.neighbors, &sim.workspace.contacts);
     let free_slip: Vec<bool> = sim.walls.iter().map(|w| w.free_slip).collect();
     let form = sim.config.method.viscosity;
+    let scales = Scales::new(&sim.particles.scale, sim.config.multi_resolution);
     // a particle created after the last neighbour search has no list yet
     let accel: Vec<(Vec2, Vec2)> = (0..x.len())
         .into_par_iter()
@@ -47,10 +49,13 @@ pub(super) fn apply_explicit_forces<K: Kernel>(
                 let rij = x[j] - x[i];
                 let r = rij.norm();
                 let du = u[j] - u[i];
+                // the pair's radius and volume factor (`resolution`)
+                let (s, v) = scales.pair(i, j);
+                let l = weights.laplacian_scaled(r, s) * v;
                 lap += match form {
-                    ViscosityKind::Laplacian => du * weights.laplacian(r),
+                    ViscosityKind::Laplacian => du * l,
                     ViscosityKind::StrainRate if r > 0.0 => {
-                        rij * ((DIM + 2.0) * du.dot(&rij) / (r * r) * weights.laplacian(r))
+                        rij * ((DIM + 2.0) * du.dot(&rij) / (r * r) * l)
                     }
                     ViscosityKind::StrainRate => Vec2::zeros(),
                 };
@@ -71,6 +76,10 @@ pub(super) fn apply_explicit_forces<K: Kernel>(
         })
         .collect();
     let m = sim.config.params.particle_mass;
+    let volumes: Vec<Real> = match scales.is_uniform() {
+        true => Vec::new(),
+        false => sim.particles.scale.iter().map(|s| s * s).collect(),
+    };
     for (i, (a, _)) in accel.iter().enumerate() {
         sim.particles.velocity[i] += a * dt;
     }
@@ -87,7 +96,7 @@ pub(super) fn apply_explicit_forces<K: Kernel>(
                     .sum();
                 if total > 0.0 {
                     let share = aw * (ct.terms.laplacian_sum / total);
-                    loads[ct.object as usize].viscous_force -= share * m;
+                    loads[ct.object as usize].viscous_force -= share * (m * volumes.get(i).copied().unwrap_or(1.0));
                 }
             }
         }

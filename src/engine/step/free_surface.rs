@@ -1,6 +1,7 @@
 //! Free-surface detection and the Dirichlet value of surface particles.
 
 use crate::engine::kernel::Kernel;
+use crate::engine::resolution::Scales;
 use crate::engine::simulation::Simulation;
 use crate::math::{vec2, Real, Vec2};
 use rayon::prelude::*;
@@ -22,6 +23,7 @@ pub(super) fn detect_free_surface<K: Kernel>(sim: &mut Simulation) {
     let asym_limit = sim.config.method.free_surface.asymmetry;
     let n_star = &sim.workspace.scratch.n_star;
     let offset = sim.config.method.free_surface.offset;
+    let scales = Scales::new(&sim.particles.scale, sim.config.multi_resolution);
     let rho_g = vec2(sim.config.params.gravity) * sim.config.params.density;
     // (is surface, Dirichlet value): the surface lies half a spacing beyond the particle,
     // so its hydrostatic pressure is rho g·m̂ l0/2 (m̂ the inward normal). Gravity only:
@@ -36,16 +38,20 @@ pub(super) fn detect_free_surface<K: Kernel>(sim: &mut Simulation) {
             }
             let mut m = Vec2::zeros();
             for &j in nb.of(i) {
-                let r = x[j as usize] - x[i];
+                let j = j as usize;
+                let r = x[j] - x[i];
                 let d2 = r.norm_squared();
                 let d = d2.sqrt();
-                if d < re {
-                    m += r * (K::w(d, re) / d2);
+                let (s, v) = scales.pair(i, j);
+                if d < re * s {
+                    m += r * (K::w(d, re * s) / d2 * v);
                 }
             }
             for c in contacts.of(i) {
                 m += c.terms.moment1;
             }
+            // the particle's own spacing
+            let l0 = l0 * scales.of(i);
             let one_sided = m.norm() * l0 / n.max(1e-12) > asym_limit;
             let surface = asym_limit <= 0.0 || n < 0.8 * n0 || one_sided;
             if !surface {
@@ -93,6 +99,7 @@ pub(super) fn release_isolated_clusters(sim: &mut Simulation) {
     let surface = &sim.particles.free_surface;
     let (re, re_lap) = (sim.config.params.re, sim.config.params.re_lap);
     let lattice_neighbours = sim.config.params.lattice.neighbours;
+    let scales = Scales::new(&sim.particles.scale, sim.config.multi_resolution);
     let seeds: Vec<usize> = (0..x.len().min(nb.len()))
         .into_par_iter()
         .filter(|&i| {
@@ -101,7 +108,9 @@ pub(super) fn release_isolated_clusters(sim: &mut Simulation) {
                 && 2 * nb
                     .of(i)
                     .iter()
-                    .filter(|&&j| (x[j as usize] - x[i]).norm() < re)
+                    .filter(|&&j| {
+                        (x[j as usize] - x[i]).norm() < re * scales.pair(i, j as usize).0
+                    })
                     .count()
                     < lattice_neighbours
         })
@@ -120,7 +129,7 @@ pub(super) fn release_isolated_clusters(sim: &mut Simulation) {
             k += 1;
             for &j in nb.of(i) {
                 let j = j as usize;
-                if (x[j] - x[i]).norm() >= re_lap {
+                if (x[j] - x[i]).norm() >= re_lap * scales.pair(i, j).0 {
                     continue;
                 }
                 if surface[j] {

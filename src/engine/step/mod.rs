@@ -77,12 +77,17 @@ fn timed<T>(total: &mut f64, stage: impl FnOnce() -> T) -> T {
 }
 
 fn initialize<K: Kernel>(sim: &mut Simulation) {
-    sim.workspace.neighbors = density::neighbor_list(&sim.config.params, &sim.particles.position);
+    sim.workspace.neighbors = density::neighbor_list(sim, &sim.particles.position);
     let walls = placed_walls(sim, 0.0);
     let weights = KernelWeights::<K>::new(sim);
     let kernels = wall_kernels(sim);
-    sim.workspace.contacts =
-        WallContacts::build(&sim.particles.position, &walls, &kernels, &weights);
+    sim.workspace.contacts = WallContacts::build(
+        &sim.particles.position,
+        &walls,
+        &kernels,
+        &weights,
+        sim.scales(),
+    );
     density::initial_number_density_and_divergence::<K>(sim);
 }
 
@@ -114,15 +119,20 @@ fn step<K: Kernel>(
     // (the lists of the last step are kept until the step is accepted: the explicit
     // stage of a repeated step reads them)
     let last_neighbors = timed(&mut times.neighbors, || {
-        let list = density::neighbor_list(&sim.config.params, &sim.workspace.scratch.x_star);
+        let list = density::neighbor_list(sim, &sim.workspace.scratch.x_star);
         std::mem::replace(&mut sim.workspace.neighbors, list)
     });
     // the walls at their predicted pose and each particle's contacts with them
     let (walls, last_contacts) = timed(&mut times.walls, || {
         let walls = placed_walls(sim, dt);
         let kernels = wall_kernels(sim);
-        let contacts =
-            WallContacts::build(&sim.workspace.scratch.x_star, &walls, &kernels, &weights);
+        let contacts = WallContacts::build(
+            &sim.workspace.scratch.x_star,
+            &walls,
+            &kernels,
+            &weights,
+            sim.scales(),
+        );
         (
             walls,
             std::mem::replace(&mut sim.workspace.contacts, contacts),

@@ -8,6 +8,7 @@ use crate::engine::config::{Projection, Source};
 use crate::engine::kernel::Kernel;
 use crate::engine::operators::{for_each_lattice_coefficient, laplacian_row, Cloud, Normalisation};
 use crate::engine::pressure::{self, SolveParams};
+use crate::engine::resolution::Scales;
 use crate::engine::simulation::{SimError, Simulation};
 use crate::engine::walls::WallContact;
 use crate::math::{vec2, Real, Vec2};
@@ -56,14 +57,15 @@ pub(super) fn assemble_pressure_equation<K: Kernel>(
     let (rho, n0, c_lap) = (p.density, p.n0, p.laplacian_coefficient);
     let x = &sim.workspace.scratch.x_star;
     let nb = &sim.workspace.neighbors;
+    let scales = Scales::new(&sim.particles.scale, sim.config.multi_resolution);
     let surface = &mut sim.particles.free_surface;
     // a particle with no Laplacian neighbour cannot be solved for: Dirichlet
     for i in 0..np {
         if !surface[i]
-            && nb
-                .of(i)
-                .iter()
-                .all(|&j| weights.laplacian((x[j as usize] - x[i]).norm()) == 0.0)
+            && nb.of(i).iter().all(|&j| {
+                let s = scales.pair(i, j as usize).0;
+                weights.laplacian_scaled((x[j as usize] - x[i]).norm(), s) == 0.0
+            })
         {
             surface[i] = true;
             sim.workspace.scratch.surface_pressure[i] = 0.0;
@@ -86,7 +88,7 @@ pub(super) fn assemble_pressure_equation<K: Kernel>(
     // source term S of ∇²p - (rho alpha / dt²) p = S
     let div_star = divergence::<K>(
         sim,
-        &Cloud::new(x, nb, p.re),
+        &Cloud::new(x, nb, p.re).with_scales(scales),
         &sim.particles.velocity,
         &sim.workspace.scratch.u_start,
     );
@@ -126,7 +128,7 @@ pub(super) fn assemble_pressure_equation<K: Kernel>(
     // which carries the Neumann condition, with the same lattice normalisation.
     let kind = sim.config.method.laplacian;
     let operator_rows = !kind.is_symmetric();
-    let cloud = Cloud::new(x, nb, p.re_lap);
+    let cloud = Cloud::new(x, nb, p.re_lap).with_scales(scales);
     let lattice = Normalisation::Reference(p.lattice_lap);
     // Imoto's second-order Laplacian is the classic one (paper 000 Theorem 3.1)
     let classic = matches!(kind, LaplacianKind::Classic | LaplacianKind::SecondOrder);
@@ -141,7 +143,6 @@ pub(super) fn assemble_pressure_equation<K: Kernel>(
             .collect()
     });
     let fills = fills.as_deref();
-    // row `row` appended to cols/vals; returns the right-hand side
     // one off-diagonal coefficient c_ij: into the matrix when j is an unknown, else its
     // Dirichlet value into the right-hand side (returned)
     let off_diagonal = |j: usize, c: Real, cols: &mut Vec<u32>, vals: &mut Vec<Real>| {
@@ -154,7 +155,8 @@ pub(super) fn assemble_pressure_equation<K: Kernel>(
             c * dirichlet[j]
         }
     };
-    let row_entries = |row: usize, cols: &mut Vec<u32>, vals: &mut Vec<Real>| -> Real {
+    // row `row` appended to cols/vals; returns the right-hand side
+    let row_entries_unscaled = |row: usize, cols: &mut Vec<u32>, vals: &mut Vec<Real>| -> Real {
         let i = particle_of[row] as usize;
         let mut diag = compress;
         let mut b = -source[i];
@@ -195,6 +197,20 @@ pub(super) fn assemble_pressure_equation<K: Kernel>(
             b -= rho_g.dot(&first_moment);
         }
         b
+    };
+    // With multi-resolution each row is multiplied by its particle's volume s_i^d, which
+    // makes the matrix symmetric (`resolution`); a uniform run skips it.
+    let row_entries = |row: usize, cols: &mut Vec<u32>, vals: &mut Vec<Real>| -> Real {
+        if scales.is_uniform() {
+            return row_entries_unscaled(row, cols, vals);
+        }
+        let before = vals.len();
+        let b = row_entries_unscaled(row, cols, vals);
+        let volume = scales.volume(particle_of[row] as usize);
+        for v in &mut vals[before..] {
+            *v *= volume;
+        }
+        b * volume
     };
     // Rows in parallel chunks written straight into per-chunk arrays (one task per
     // chunk, rows in order: deterministic), then copied into the previous step's

@@ -3,6 +3,7 @@
 
 use crate::engine::config::SpacingControl;
 use crate::engine::kernel::Kernel;
+use crate::engine::resolution::Scales;
 use crate::engine::simulation::{Simulation, WallLoad};
 use crate::engine::walls::{moment_about, PlacedWall};
 use crate::math::{Real, Vec2};
@@ -20,6 +21,14 @@ pub(super) fn keep_particles_apart(
     let e = sim.config.method.restitution;
     let m = sim.config.params.particle_mass;
     let n = sim.particles.len();
+    // a copy: the loops below move the particles (empty for a uniform run)
+    let multi = sim.config.multi_resolution;
+    let scale = if multi {
+        sim.particles.scale.clone()
+    } else {
+        Vec::new()
+    };
+    let scales = Scales::new(&scale, multi);
     if let SpacingControl::Collision { distance } = sim.config.method.spacing_control {
         let rc = distance * l0;
         let (x, u, nb) = (
@@ -35,7 +44,7 @@ pub(super) fn keep_particles_apart(
                     let j = j as usize;
                     let r = x[j] - x[i];
                     let dist = r.norm();
-                    if dist < rc && dist > 0.0 {
+                    if dist < rc * scales.pair(i, j).0 && dist > 0.0 {
                         let rh = r / dist;
                         let vn = (u[j] - u[i]).dot(&rh);
                         if vn < 0.0 {
@@ -56,6 +65,7 @@ pub(super) fn keep_particles_apart(
     if rw > 0.0 {
         for i in 0..n {
             for c in sim.workspace.contacts.of(i) {
+                let rw = rw * scales.of(i);
                 if c.distance >= rw && !c.penetrated {
                     continue;
                 }
@@ -72,7 +82,7 @@ pub(super) fn keep_particles_apart(
                     pos = c.point + c.normal * (0.5 * rw);
                 }
                 sim.particles.position[i] = pos;
-                let f = -du * (m / dt);
+                let f = -du * (m * scales.volume(i) / dt);
                 let load = &mut loads[c.object as usize];
                 load.repulsion_force += f;
                 load.repulsion_moment +=
@@ -89,6 +99,7 @@ pub(super) fn keep_particles_apart(
 /// of the PPE source and to the gradient) loses a share of order eps every step.
 pub(super) fn filter_velocity<K: Kernel>(sim: &mut Simulation, eps: Real) {
     let (re, n0) = (sim.config.params.re, sim.config.params.n0);
+    let scales = sim.scales();
     let (x, u, nb) = (
         &sim.workspace.scratch.x_star,
         &sim.particles.velocity,
@@ -104,8 +115,9 @@ pub(super) fn filter_velocity<K: Kernel>(sim: &mut Simulation, eps: Real) {
             for &j in nb.of(i) {
                 let j = j as usize;
                 let d = (x[j] - x[i]).norm();
-                if d < re && d > 0.0 {
-                    s += (u[j] - u[i]) * K::w(d, re);
+                let (sij, v) = scales.pair(i, j);
+                if d < re * sij && d > 0.0 {
+                    s += (u[j] - u[i]) * (K::w(d, re * sij) * v);
                 }
             }
             s * (eps / n0)
@@ -128,6 +140,7 @@ pub(super) fn shift_particles<K: Kernel>(sim: &mut Simulation, a: Real) {
         sim.config.params.re,
         sim.config.params.n0,
     );
+    let scales = sim.scales();
     let (x, nb, contacts, surface) = (
         &sim.particles.position,
         &sim.workspace.neighbors,
@@ -143,15 +156,17 @@ pub(super) fn shift_particles<K: Kernel>(sim: &mut Simulation, a: Real) {
                 let j = j as usize;
                 let r = x[i] - x[j];
                 let d = r.norm();
-                if d >= re || d == 0.0 {
+                let (s, v) = scales.pair(i, j);
+                if d >= re * s || d == 0.0 {
                     continue;
                 }
-                grad += r * (K::dw(d, re) / d);
+                grad += r * (K::dw(d, re * s) / d * v);
                 near_surface |= surface[j];
             }
             for c in contacts.of(i) {
                 grad += c.terms.number_density_gradient;
             }
+            let l0 = l0 * scales.of(i);
             let mut dr = grad * (-a * l0 * l0 / n0);
             if near_surface {
                 let g = grad.norm();

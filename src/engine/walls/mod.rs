@@ -17,6 +17,7 @@
 pub mod pressure_load;
 
 use crate::engine::operators::VirtualPoints;
+use crate::engine::resolution::Scales;
 use crate::geometry::{closest_on_segment, inside, signed_distance, WallShape};
 use crate::math::{cross, perp, Mat2, Real, Vec2};
 use rayon::prelude::*;
@@ -201,16 +202,20 @@ pub trait WallWeights: Sync {
     fn lap(&self, r: Real) -> Real;
 }
 
-/// The virtual-lattice sums of a particle at `x` against one placed wall, given its
-/// nearest surface point `xw`.
+/// The virtual-lattice sums of a particle at `x` of spacing `scale` l0 (1 but with
+/// multi-resolution) against one placed wall, given its nearest surface point `xw`. The
+/// virtual lattice has the particle's own spacing and radii; w(r; s r_e) = w(r/s; r_e).
 pub fn wall_terms(
     x: Vec2,
     xw: Vec2,
     wall: &PlacedWall,
     k: &WallKernels,
     weights: &dyn WallWeights,
+    scale: Real,
 ) -> (WallTerms, Vec2, bool) {
-    let l0 = k.l0;
+    let s = scale;
+    let l0 = k.l0 * s;
+    let (re, re_lap) = (k.re * s, k.re_lap * s);
     let penetrated = inside(x, &wall.loop_edges);
     let mut n = x - xw;
     let d = n.norm();
@@ -268,7 +273,7 @@ pub fn wall_terms(
     };
     let de = (xe - xw).norm();
     let t = perp(n);
-    let reach = k.re.max(k.re_lap);
+    let reach = re.max(re_lap);
     let reach2 = reach * reach;
     let na = (reach / l0).ceil() as i32;
     let rows_behind = ((reach - de) / l0).ceil() as i32 + 1;
@@ -286,16 +291,16 @@ pub fn wall_terms(
             }
             // Rows behind the nearest point are inside the solid unless the geometry
             // turns away (apex): measure. Rows in front are solid only in concave corners.
-            let s = signed_distance(p, &wall.loop_edges);
-            let frac = (0.5 + s / l0).clamp(0.0, 1.0);
+            let depth_out = signed_distance(p, &wall.loop_edges);
+            let frac = (0.5 + depth_out / l0).clamp(0.0, 1.0);
             if frac <= 0.0 {
                 continue;
             }
             let rn = r2.sqrt().max(0.3 * l0);
-            let w = weights.w(rn);
-            if rn < k.re {
+            let w = weights.w(rn / s);
+            if rn < re {
                 terms.number_density += frac * w;
-                terms.number_density_gradient -= r * (frac * weights.dw(rn) / rn);
+                terms.number_density_gradient -= r * (frac * (weights.dw(rn / s) / s) / rn);
                 terms.moment1 += r * (frac * w / (rn * rn));
                 let c = frac * w / (rn * rn);
                 terms.moment2[0] += c * r.x * r.x;
@@ -303,8 +308,8 @@ pub fn wall_terms(
                 terms.moment2[2] += c * r.y * r.y;
                 terms.count += frac;
             }
-            if rn < k.re_lap {
-                let l = frac * weights.lap(rn);
+            if rn < re_lap {
+                let l = frac * (weights.lap(rn / s) / (s * s));
                 terms.laplacian_sum += l;
                 terms.laplacian_moment += r * l;
             }
@@ -408,12 +413,14 @@ impl WallContacts {
         t
     }
 
-    /// Find every (particle, wall) pair within the largest kernel radius and sum its terms.
+    /// Find every (particle, wall) pair within the largest kernel radius (of the
+    /// particle's spacing) and sum its terms.
     pub fn build(
         positions: &[Vec2],
         walls: &[PlacedWall],
         k: &WallKernels,
         weights: &dyn WallWeights,
+        scales: Scales,
     ) -> Self {
         const CHUNK: usize = 1024;
         let n = positions.len();
@@ -431,12 +438,13 @@ impl WallContacts {
                 let mut out = Vec::new();
                 for i in c * CHUNK..((c + 1) * CHUNK).min(n) {
                     let x = positions[i];
+                    let s = scales.of(i);
                     let before = out.len();
                     for (o, wall) in walls.iter().enumerate() {
-                        let Some((xw, d)) = wall.nearest(x, reach) else {
+                        let Some((xw, d)) = wall.nearest(x, reach * s) else {
                             continue;
                         };
-                        let (terms, normal, penetrated) = wall_terms(x, xw, wall, k, weights);
+                        let (terms, normal, penetrated) = wall_terms(x, xw, wall, k, weights, s);
                         out.push(WallContact {
                             object: o as u32,
                             point: xw,

@@ -1,0 +1,203 @@
+//! The multi-resolution layout (`case.refinement`): the fluid lattice of spacing l0 is
+//! merged, 2 × 2 sites at a time, into particles of spacing 2 l0 wherever the load is
+//! not decided.
+//!
+//! A coarse cell is a 2 l0 × 2 l0 square of the lattice anchored at the first
+//! particle. It becomes one particle of scale 2 at its centre, with the mean velocity of
+//! its four sites, when all four sites hold a particle (the cell is inside the fluid and
+//! clear of every surface, so walls and free surfaces keep their fine rows wherever a
+//! cell is cut) and the cell touches no fine box. The two lattices then share their
+//! cell boundaries: a coarse particle sits l0 from the edge of its cell as a fine one
+//! sits l0/2 from its own, so the virtual wall lattice of either (first row half a
+//! spacing behind the surface) continues it.
+//!
+//! The fine boxes of `"auto"` cover each moving body's swept path over the run,
+//! widened by [`AUTO_MARGIN`] body sizes on every side.
+
+use crate::case::{Case, Motion, Refinement};
+use crate::coupling::prescribed::PrescribedVelocity;
+use crate::geometry::centroid;
+use crate::math::{rotate, vec2, Real, Vec2};
+use std::collections::HashMap;
+
+/// Margin of an automatic fine box around a body's swept path, in body sizes (the
+/// larger side of the body's bounding box). The load on an entering body is decided
+/// within a few wetted half-widths c of it, and c reaches half the breadth at chine
+/// wetting.
+pub const AUTO_MARGIN: Real = 1.0;
+
+/// Samples of a body's path over the run when sweeping it.
+const PATH_SAMPLES: usize = 64;
+
+/// An axis-aligned box.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct FineBox {
+    pub min: Vec2,
+    pub max: Vec2,
+}
+
+impl FineBox {
+    fn touches_cell(&self, lo: Vec2, hi: Vec2) -> bool {
+        lo.x < self.max.x && hi.x > self.min.x && lo.y < self.max.y && hi.y > self.min.y
+    }
+}
+
+/// The fine boxes of a case, `None` for a uniform layout. `"auto"` without a moving
+/// body has no fine box: everything is coarse but the rows along walls, bodies and
+/// free surfaces.
+pub fn fine_boxes(case: &Case) -> Option<Vec<FineBox>> {
+    match &case.refinement {
+        Refinement::None => None,
+        Refinement::Regions(r) => Some(
+            r.fine
+                .iter()
+                .map(|b| FineBox {
+                    min: vec2(b.min),
+                    max: vec2(b.max),
+                })
+                .collect(),
+        ),
+        Refinement::Auto => Some(
+            case.bodies
+                .iter()
+                .filter_map(|b| swept_box(b, case))
+                .collect(),
+        ),
+    }
+}
+
+/// The bounding box of a moving body over [0, time.end], widened by the margin; `None`
+/// for a body that does not move. Free bodies follow their initial velocity and gravity
+/// (ballistic, an overestimate of the path in water); a rotating body is swept as its
+/// bounding circle about the centroid.
+fn swept_box(body: &crate::case::Body, case: &Case) -> Option<FineBox> {
+    let poly: Vec<Vec2> = body.polygon.iter().map(|p| vec2(*p)).collect();
+    let c = centroid(&poly);
+    let radius = poly.iter().map(|p| (p - c).norm()).fold(0.0, Real::max);
+    let (mut lo, mut hi) = (Vec2::repeat(Real::INFINITY), Vec2::repeat(Real::NEG_INFINITY));
+    for p in &poly {
+        lo = lo.inf(p);
+        hi = hi.sup(p);
+    }
+    let size = (hi.x - lo.x).max(hi.y - lo.y);
+    let end = case.time.end;
+    let g = vec2(case.fluid.gravity);
+    // displacement of the body frame and whether it turns, at time t
+    let (path, turns): (Box<dyn Fn(Real) -> Vec2>, bool) = match &body.motion {
+        Motion::Prescribed {
+            velocity,
+            angular_velocity,
+            table,
+        } => {
+            let v = PrescribedVelocity::new(*velocity, *angular_velocity, table.as_ref());
+            let turns = *angular_velocity != 0.0
+                || table.iter().flatten().any(|s| s.angular_velocity != 0.0);
+            let moves = turns
+                || vec2(*velocity).norm() > 0.0
+                || table.iter().flatten().any(|s| vec2(s.velocity).norm() > 0.0);
+            if !moves {
+                return None;
+            }
+            let h = end / PATH_SAMPLES as Real;
+            (
+                Box::new(move |t: Real| {
+                    // trapezoids over the samples up to t
+                    let steps = (t / h).round() as usize;
+                    (0..steps).fold(Vec2::zeros(), |x, k| {
+                        let (a, b) = (v.at(k as Real * h), v.at((k + 1) as Real * h));
+                        x + (a.velocity + b.velocity) * (0.5 * h)
+                    })
+                }),
+                turns,
+            )
+        }
+        Motion::Free {
+            velocity,
+            angular_velocity,
+            ..
+        } => {
+            let v0 = vec2(*velocity);
+            (
+                Box::new(move |t: Real| v0 * t + g * (0.5 * t * t)),
+                *angular_velocity != 0.0,
+            )
+        }
+    };
+    let position = vec2(body.position);
+    let (mut blo, mut bhi) = (Vec2::repeat(Real::INFINITY), Vec2::repeat(Real::NEG_INFINITY));
+    for k in 0..=PATH_SAMPLES {
+        let offset = position + path(end * k as Real / PATH_SAMPLES as Real);
+        if turns {
+            let centre = offset + rotate(c, body.angle);
+            blo = blo.inf(&(centre - Vec2::repeat(radius)));
+            bhi = bhi.sup(&(centre + Vec2::repeat(radius)));
+        } else {
+            for p in &poly {
+                let x = offset + rotate(*p, body.angle);
+                blo = blo.inf(&x);
+                bhi = bhi.sup(&x);
+            }
+        }
+    }
+    let margin = Vec2::repeat(AUTO_MARGIN * size);
+    Some(FineBox {
+        min: blo - margin,
+        max: bhi + margin,
+    })
+}
+
+/// Merge the lattice sites `(position, velocity)` of spacing `l0` into coarse cells
+/// outside `boxes` (module docs): positions, velocities and scales (1 or 2).
+pub fn coarsen(
+    sites: Vec<(Vec2, Vec2)>,
+    l0: Real,
+    boxes: &[FineBox],
+) -> (Vec<Vec2>, Vec<Vec2>, Vec<Real>) {
+    let Some(&(first, _)) = sites.first() else {
+        return (Vec::new(), Vec::new(), Vec::new());
+    };
+    let cell = 2.0 * l0;
+    let anchor = first - Vec2::repeat(0.5 * l0);
+    let key = |p: Vec2| {
+        let q = (p - anchor) / cell;
+        (q.x.floor() as i64, q.y.floor() as i64)
+    };
+    // the sites of each cell that sit exactly on the anchored lattice
+    let mut cells: HashMap<(i64, i64), Vec<usize>> = HashMap::new();
+    for (k, (p, _)) in sites.iter().enumerate() {
+        let q = (p - anchor) / l0 - Vec2::repeat(0.5);
+        if (q.x - q.x.round()).abs() < 1e-6 && (q.y - q.y.round()).abs() < 1e-6 {
+            cells.entry(key(*p)).or_default().push(k);
+        }
+    }
+    let mut merged = vec![false; sites.len()];
+    let mut coarse: Vec<((i64, i64), Vec2)> = Vec::new();
+    for (&(cx, cy), members) in &cells {
+        let lo = anchor + Vec2::new(cx as Real, cy as Real) * cell;
+        let hi = lo + Vec2::repeat(cell);
+        if members.len() != 4 || boxes.iter().any(|b| b.touches_cell(lo, hi)) {
+            continue;
+        }
+        let velocity = members.iter().map(|&k| sites[k].1).sum::<Vec2>() / 4.0;
+        for &k in members {
+            merged[k] = true;
+        }
+        coarse.push(((cx, cy), velocity));
+    }
+    // fine sites in their original order, then coarse cells row by row
+    coarse.sort_by_key(|&((cx, cy), _)| (cy, cx));
+    let (mut pos, mut vel, mut scale) = (Vec::new(), Vec::new(), Vec::new());
+    for (k, (p, v)) in sites.into_iter().enumerate() {
+        if !merged[k] {
+            pos.push(p);
+            vel.push(v);
+            scale.push(1.0);
+        }
+    }
+    for ((cx, cy), v) in coarse {
+        pos.push(anchor + (Vec2::new(cx as Real, cy as Real) + Vec2::repeat(0.5)) * cell);
+        vel.push(v);
+        scale.push(2.0);
+    }
+    (pos, vel, scale)
+}
