@@ -16,7 +16,7 @@ fn main() {
         let p = &sim.particles;
         let mut idx: Vec<usize> = (0..p.len()).collect();
         idx.sort_by(|&a, &b| p.velocity[b].norm().total_cmp(&p.velocity[a].norm()));
-        println!("step {s} dt {dt:.2e} maxu {:.3e}", p.velocity[idx[0]].norm());
+        println!("step {s} dt {dt:.2e} maxu {:.3e} loads {:?} contacts {}", p.velocity[idx[0]].norm(), sim.loads.iter().map(|l| l.force).collect::<Vec<_>>(), sim.wall_contacts().contacts.len());
         if s + 1 == steps || s < 2 {
             for &i in idx.iter().take(8) {
                 let x = p.position[i];
