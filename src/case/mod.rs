@@ -79,10 +79,10 @@ pub struct Case {
     /// (twice as coarse where `refinement` allows).
     #[schemars(extend("minItems" = 1))]
     pub fluid_blocks: Vec<FluidBlock>,
-    /// Where the fluid may be laid out coarser than `particle_spacing`: "none" (one
-    /// spacing, the default), "auto" (fine around each moving body's path, twice as
-    /// coarse elsewhere) or {"fine": [boxes]}.
-    #[serde(default, skip_serializing_if = "Refinement::is_none")]
+    /// Where the fluid may be laid out coarser than `particle_spacing`: "auto" (the
+    /// default: fine around each moving body's path, twice as coarse elsewhere; uniform
+    /// without a moving body), "none" (one spacing everywhere) or {"fine": [boxes]}.
+    #[serde(default, skip_serializing_if = "Refinement::is_auto")]
     pub refinement: Refinement,
     /// Fixed walls (open or closed polylines).
     #[serde(default)]

@@ -1,8 +1,9 @@
 //! The case's `refinement`: where particles may be coarser than `particle_spacing`.
 //!
-//! `"none"` keeps one spacing everywhere (the layout of a case without the field);
-//! `"auto"` keeps `particle_spacing` around each moving body's path and doubles it
-//! elsewhere; `{"fine": [{"min": …, "max": …}, …]}` names the fine boxes itself.
+//! `"auto"` (the default) keeps `particle_spacing` around each moving body's path and
+//! doubles it elsewhere, and is uniform in a scene without a moving body; `"none"` keeps
+//! one spacing everywhere; `{"fine": [{"min": …, "max": …}, …]}` names the fine boxes
+//! itself.
 
 use super::Domain;
 use schemars::JsonSchema;
@@ -12,9 +13,10 @@ use serde::{Deserialize, Deserializer, Serialize, Serializer};
 #[derive(Debug, Clone, PartialEq, Default)]
 pub enum Refinement {
     /// One spacing everywhere.
-    #[default]
     None,
-    /// Fine around each moving body's swept path, twice as coarse elsewhere.
+    /// Fine around each moving body's swept path, twice as coarse elsewhere; one
+    /// spacing everywhere without a moving body.
+    #[default]
     Auto,
     /// Fine inside the given boxes, twice as coarse elsewhere.
     Regions(RefinementRegions),
@@ -43,7 +45,8 @@ enum Form {
 enum Mode {
     /// One spacing everywhere.
     None,
-    /// Fine around each moving body's swept path, twice as coarse elsewhere.
+    /// Fine around each moving body's swept path, twice as coarse elsewhere; one
+    /// spacing everywhere without a moving body.
     Auto,
 }
 
@@ -90,7 +93,7 @@ impl JsonSchema for Refinement {
 }
 
 impl Refinement {
-    pub fn is_none(&self) -> bool {
-        *self == Refinement::None
+    pub fn is_auto(&self) -> bool {
+        *self == Refinement::Auto
     }
 }

@@ -14,7 +14,7 @@
 //! The fine boxes of `"auto"` cover each moving body's swept path over the run,
 //! widened by [`AUTO_MARGIN`] body sizes on every side.
 
-use crate::case::{Case, Motion, Refinement};
+use crate::case::{Case, Motion, Projection, Refinement, Scheme};
 use crate::coupling::prescribed::PrescribedVelocity;
 use crate::geometry::centroid;
 use crate::math::{rotate, vec2, Real, Vec2};
@@ -42,10 +42,32 @@ impl FineBox {
     }
 }
 
-/// The fine boxes of a case, `None` for a uniform layout. `"auto"` without a moving
-/// body has no fine box: everything is coarse but the rows along walls, bodies and
-/// free surfaces.
+/// Why `scheme` cannot run a multi-resolution layout, if it cannot: the operators with a
+/// pair radius and volume factor (`engine::resolution`) are the lattice-normalised
+/// Laplacians (HL, classic), the gradients of `pressure_gradient`, the approximate
+/// projection and both load estimators; the per-row operator variants (CHL,
+/// anisotropic, least squares) and the exact projection are single-resolution.
+pub fn unsupported_by_multi_resolution(scheme: &Scheme) -> Option<&'static str> {
+    use crate::case::{GradientKind as G, LaplacianKind as L};
+    if !matches!(scheme.laplacian, L::HigherOrder | L::Classic | L::SecondOrder) {
+        return Some("scheme.laplacian must be higher_order, classic or second_order");
+    }
+    if matches!(scheme.gradient, G::Anisotropic | G::LeastSquares) {
+        return Some("scheme.gradient anisotropic and least_squares are single-resolution");
+    }
+    if scheme.projection != Projection::Approximate {
+        return Some("scheme.projection must be approximate");
+    }
+    None
+}
+
+/// The fine boxes of a case, `None` for a uniform layout: `"none"`, or `"auto"` without
+/// a moving body or with a scheme that is single-resolution only
+/// ([`unsupported_by_multi_resolution`]; validation rejects explicit boxes with one).
 pub fn fine_boxes(case: &Case) -> Option<Vec<FineBox>> {
+    if unsupported_by_multi_resolution(&case.scheme).is_some() {
+        return None;
+    }
     match &case.refinement {
         Refinement::None => None,
         Refinement::Regions(r) => Some(
@@ -57,12 +79,14 @@ pub fn fine_boxes(case: &Case) -> Option<Vec<FineBox>> {
                 })
                 .collect(),
         ),
-        Refinement::Auto => Some(
-            case.bodies
+        Refinement::Auto => {
+            let boxes: Vec<FineBox> = case
+                .bodies
                 .iter()
                 .filter_map(|b| swept_box(b, case))
-                .collect(),
-        ),
+                .collect();
+            (!boxes.is_empty()).then_some(boxes)
+        }
     }
 }
 

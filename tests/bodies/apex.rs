@@ -140,7 +140,7 @@ fn apex_number_density(radius: Real) {
                     .filter(|&p| !inside(p, edges))
                     .map(|p| Koshizuka::w((p - x).norm(), prm.re))
                     .sum();
-                let (terms, _, penetrated) = wall_terms(x, xw, &placed, &kernels, &weights);
+                let (terms, _, penetrated) = wall_terms(x, xw, &placed, &kernels, &weights, 1.0);
                 assert!(!penetrated);
                 let err = (fluid + terms.number_density) / prm.n0 - 1.0;
                 let flat = (fluid + flat_wall_z(d, l0, prm.re)) / prm.n0 - 1.0;
@@ -199,7 +199,7 @@ fn particle_near_convex_box_corner_gets_full_lattice_number_density() {
             .map(|j| Koshizuka::w((x[j] - x[i]).norm(), prm.re))
             .sum();
         let (xw, d) = placed.nearest(x[i], prm.re.max(prm.re_lap)).unwrap();
-        let (terms, _, _) = wall_terms(x[i], xw, &placed, &kernels, &weights);
+        let (terms, _, _) = wall_terms(x[i], xw, &placed, &kernels, &weights, 1.0);
         let err = (fluid + terms.number_density) / prm.n0 - 1.0;
         let flat = (fluid + flat_wall_z(d, l0, prm.re)) / prm.n0 - 1.0;
         println!(

@@ -643,3 +643,52 @@ fn damping_zone_with_negative_strength_or_no_length() {
         "differ from start",
     );
 }
+
+#[test]
+fn refinement_forms_and_their_errors() {
+    // the three forms parse; "auto" is what a case without the field gets
+    for (form, expected) in [
+        (json!("none"), mpsfsi::case::Refinement::None),
+        (json!("auto"), mpsfsi::case::Refinement::Auto),
+    ] {
+        let mut v = base_value();
+        v["refinement"] = form;
+        assert_eq!(parse_case_value(v).unwrap().refinement, expected);
+    }
+    assert_eq!(base_case().refinement, mpsfsi::case::Refinement::Auto);
+    let mut v = base_value();
+    v["refinement"] = json!({ "fine": [{ "min": [-0.5, -0.5], "max": [0.5, 0.0] }] });
+    let case = parse_case_value(v).unwrap();
+    validate(&case, &Limits::default()).expect("a fine box is valid");
+    // a misspelt mode names the field and the forms it takes
+    let mut v = base_value();
+    v["refinement"] = json!("automatic");
+    let e = parse_case_value(v).expect_err("unknown mode");
+    assert_error(&e, "refinement", "\"none\", \"auto\"");
+    let mut v = base_value();
+    v["refinement"] = json!({ "fine": [], "levels": 3 });
+    let e = parse_case_value(v).expect_err("unknown field");
+    assert!(e.path.starts_with("refinement"), "{e:?}");
+    assert!(e.message.contains("levels"), "{e:?}");
+    // an inverted box, an empty list, a single-resolution scheme with explicit boxes
+    assert_error(
+        &rejected_json(|v| {
+            v["refinement"] = json!({ "fine": [{ "min": [0.5, -0.5], "max": [-0.5, 0.0] }] })
+        }),
+        "refinement.fine[0]",
+        "below max",
+    );
+    assert_error(
+        &rejected_json(|v| v["refinement"] = json!({ "fine": [] })),
+        "refinement.fine",
+        "at least one box",
+    );
+    assert_error(
+        &rejected_json(|v| {
+            v["refinement"] = json!({ "fine": [{ "min": [-0.5, -0.5], "max": [0.5, 0.0] }] });
+            v["scheme"]["laplacian"] = json!("least_squares");
+        }),
+        "refinement",
+        "scheme.laplacian",
+    );
+}

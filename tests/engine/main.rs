@@ -7,6 +7,7 @@ mod determinism;
 mod impact_defaults;
 mod kernels;
 mod lattice;
+mod multi_resolution;
 mod neighbors;
 mod statistics;
 mod wall_pressure;

@@ -69,7 +69,7 @@ fn number_density(
         re_lap: params.re_lap,
     };
     let (xw, _) = wall.nearest(x, re).expect("within reach of the wall");
-    let (terms, normal, penetrated) = wall_terms(x, xw, wall, &k, &W(re, params.re_lap));
+    let (terms, normal, penetrated) = wall_terms(x, xw, wall, &k, &W(re, params.re_lap), 1.0);
     assert!(!penetrated);
     (fluid_part + terms.number_density, normal)
 }

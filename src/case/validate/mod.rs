@@ -15,7 +15,9 @@
 //!    the domain, bodies clear of walls and of each other: [`geometry`];
 //! 5. body motion: free bodies with positive mass and inertia, velocity tables
 //!    strictly increasing in time (checked with each body's polygon): [`geometry`];
-//! 6. names: walls and bodies share the `body` column of loads.csv, so their names are
+//! 6. refinement: explicit fine boxes non-empty, with a scheme that runs on a
+//!    multi-resolution layout: [`scalars`];
+//! 7. names: walls and bodies share the `body` column of loads.csv, so their names are
 //!    unique together and non-empty; probe names likewise among probes: [`names`].
 
 mod finite;
@@ -63,6 +65,7 @@ pub fn validate(case: &Case, limits: &Limits) -> Check {
     geometry::check_overlaps(case)?;
     geometry::check_output(case)?;
     scalars::check_damping_zones(case)?;
+    scalars::check_refinement(case)?;
     names::check_names(case)?;
     Ok(())
 }

@@ -268,3 +268,32 @@ pub(super) fn check_damping_zones(case: &Case) -> Check {
     }
     Ok(())
 }
+
+/// Explicit fine boxes: each non-empty (min < max), and a scheme whose operators run
+/// on a multi-resolution layout.
+pub(super) fn check_refinement(case: &Case) -> Check {
+    let crate::case::Refinement::Regions(regions) = &case.refinement else {
+        return Ok(());
+    };
+    if regions.fine.is_empty() {
+        return reject(
+            "refinement.fine",
+            "must list at least one box (\"none\" lays out one spacing everywhere)",
+        );
+    }
+    for (k, b) in regions.fine.iter().enumerate() {
+        if !(b.min[0] < b.max[0] && b.min[1] < b.max[1]) {
+            return reject(
+                format!("refinement.fine[{k}]"),
+                format!("min {:?} must be below max {:?} in x and y", b.min, b.max),
+            );
+        }
+    }
+    if let Some(why) = crate::engine::refinement::unsupported_by_multi_resolution(&case.scheme) {
+        return reject(
+            "refinement",
+            format!("fine boxes need a multi-resolution scheme: {why} (or set \"none\")"),
+        );
+    }
+    Ok(())
+}

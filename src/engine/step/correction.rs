@@ -96,6 +96,7 @@ pub(super) fn correct_velocity_and_position<K: Kernel>(
         let integral = pressure_loads(
             x,
             p,
+            sim.scales(),
             &nb.grid,
             walls,
             &w,

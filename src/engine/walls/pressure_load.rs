@@ -11,7 +11,9 @@
 //! At a surface point s the pressure is the Shepard average of the near fluid particles'
 //! pressures carried to s with the Neumann condition of the wall,
 //! p(s) = Σ w_j [p_j + rho (g - a_w)·(s - x_j)] / max(Σ w_j, floor),
-//! so a hydrostatic field is read exactly. The floor (half the weight a point with fluid
+//! so a hydrostatic field is read exactly. With multi-resolution each particle weighs
+//! with its own radius, w(d; r_e s_j) = w(d/s_j; r_e): its volume over its kernel's
+//! area is the same at every level, so the floor carries over. The floor (half the weight a point with fluid
 //! on its whole side collects) lets points the fluid barely reaches (the contact line, a
 //! thin jet) fade to zero instead of taking one distant particle's value. Negative
 //! values are clipped (the fluid cannot pull on a wall). Only particles on the fluid
@@ -19,6 +21,7 @@
 
 use super::{moment_about, PlacedWall};
 use crate::engine::neighbors::CellGrid;
+use crate::engine::resolution::Scales;
 use crate::geometry::inside;
 use crate::math::{perp, Real, Vec2};
 use rayon::prelude::*;
@@ -90,6 +93,7 @@ fn full_side_weight(w: &dyn Fn(Real) -> Real, l0: Real, re: Real) -> Real {
 pub fn pressure_loads(
     x: &[Vec2],
     p: &[Real],
+    scales: Scales,
     grid: &CellGrid,
     walls: &[PlacedWall],
     w: &(dyn Fn(Real) -> Real + Sync),
@@ -100,6 +104,7 @@ pub fn pressure_loads(
 ) -> Vec<(Vec2, Real)> {
     debug_assert!(grid.cell_size >= re);
     let floor = 0.5 * full_side_weight(w, l0, re);
+    let reach = (re * scales.range().1 / grid.cell_size).ceil() as isize;
     walls
         .iter()
         .map(|wall| {
@@ -110,13 +115,14 @@ pub fn pressure_loads(
                 .map(|s| {
                     let c = (gravity - wall.state.point_acceleration(s.point)) * rho;
                     let (mut sw, mut swp) = (0.0, 0.0);
-                    grid.for_each_near(s.point, 1, |j| {
+                    grid.for_each_near(s.point, reach, |j| {
                         let r = s.point - x[j];
                         let d = r.norm();
-                        if d >= re || r.dot(&s.normal) > 0.0 {
+                        let sj = scales.of(j);
+                        if d >= re * sj || r.dot(&s.normal) > 0.0 {
                             return; // out of reach, or behind the surface
                         }
-                        let wj = w(d);
+                        let wj = w(d / sj);
                         sw += wj;
                         swp += wj * (p[j] + c.dot(&r));
                     });
