@@ -5,6 +5,7 @@
 //! silently ignored.
 
 mod load;
+pub mod prescribed;
 mod refinement;
 pub mod schema;
 mod scheme;

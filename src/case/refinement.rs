@@ -32,17 +32,17 @@ pub struct RefinementRegions {
     pub fine: Vec<Domain>,
 }
 
-/// The serialised forms: a mode name or an object.
+/// Where particles may be coarser than `particle_spacing`: "auto", "none" or fine boxes.
 #[derive(Serialize, Deserialize, JsonSchema)]
 #[serde(untagged)]
 enum Form {
-    Mode(Mode),
+    Mode(RefinementMode),
     Regions(RefinementRegions),
 }
 
 #[derive(Serialize, Deserialize, JsonSchema)]
 #[serde(rename_all = "snake_case")]
-enum Mode {
+enum RefinementMode {
     /// One spacing everywhere.
     None,
     /// Fine around each moving body's swept path, twice as coarse elsewhere; one
@@ -53,8 +53,8 @@ enum Mode {
 impl Serialize for Refinement {
     fn serialize<S: Serializer>(&self, s: S) -> Result<S::Ok, S::Error> {
         match self {
-            Refinement::None => Form::Mode(Mode::None),
-            Refinement::Auto => Form::Mode(Mode::Auto),
+            Refinement::None => Form::Mode(RefinementMode::None),
+            Refinement::Auto => Form::Mode(RefinementMode::Auto),
             Refinement::Regions(r) => Form::Regions(r.clone()),
         }
         .serialize(s)

@@ -24,10 +24,9 @@
 //! given or from the polygon at uniform density, the centroid as centre of mass).
 
 pub mod added_mass;
-pub mod prescribed;
 
 pub use added_mass::AddedMass;
-pub use prescribed::{Kinematics, PrescribedVelocity};
+pub use crate::case::prescribed::{Kinematics, PrescribedVelocity};
 
 use crate::case::{Case, Dof, Motion};
 use crate::engine::Simulation;

@@ -15,7 +15,7 @@
 //! widened by [`AUTO_MARGIN`] body sizes on every side.
 
 use crate::case::{Case, Motion, Projection, Refinement, Scheme};
-use crate::coupling::prescribed::PrescribedVelocity;
+use crate::case::prescribed::PrescribedVelocity;
 use crate::geometry::centroid;
 use crate::math::{rotate, vec2, Real, Vec2};
 use std::collections::HashMap;

@@ -51,6 +51,8 @@ pub struct Trace {
     pub steps: Vec<StepRecord>,
     pub wall_names: Vec<String>,
     pub particles: usize,
+    /// summary.json's `particle_steps`: the particle updates of the run.
+    pub particle_steps: u64,
     pub wall_seconds: f64,
     pub coupling_seconds: f64,
     pub error: Option<SimError>,
@@ -101,6 +103,7 @@ pub fn run(
         steps,
         wall_names: sim.wall_names(),
         particles: sim.particle_count(),
+        particle_steps: sim.stats.particle_steps,
         wall_seconds: clock.elapsed().as_secs_f64(),
         coupling_seconds: coupling.seconds,
         error,

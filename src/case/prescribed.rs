@@ -1,7 +1,7 @@
 //! Prescribed (kinematic) motion: a constant velocity or a velocity time table,
 //! linearly interpolated and held constant outside its range.
 
-use crate::case::VelocitySample;
+use super::VelocitySample;
 use crate::math::{vec2, Real, Vec2};
 
 /// Imposed velocity of a prescribed body.
