@@ -4,7 +4,9 @@ fn main() {
     let args: Vec<String> = std::env::args().collect();
     let text = std::fs::read_to_string(&args[1]).unwrap();
     let mut v: serde_json::Value = serde_json::from_str(&text).unwrap();
-    for a in &args[3..] { apply_override(&mut v, a).unwrap(); }
+    for a in &args[3..] {
+        apply_override(&mut v, a).unwrap();
+    }
     let case = parse_case_value(v).unwrap();
     let mut sim = Simulation::new(&case);
     let steps: usize = args[2].parse().unwrap();
@@ -16,7 +18,12 @@ fn main() {
         let p = &sim.particles;
         let mut idx: Vec<usize> = (0..p.len()).collect();
         idx.sort_by(|&a, &b| p.velocity[b].norm().total_cmp(&p.velocity[a].norm()));
-        println!("step {s} dt {dt:.2e} maxu {:.3e} loads {:?} contacts {}", p.velocity[idx[0]].norm(), sim.loads.iter().map(|l| l.force).collect::<Vec<_>>(), sim.wall_contacts().contacts.len());
+        println!(
+            "step {s} dt {dt:.2e} maxu {:.3e} loads {:?} contacts {}",
+            p.velocity[idx[0]].norm(),
+            sim.loads.iter().map(|l| l.force).collect::<Vec<_>>(),
+            sim.wall_contacts().contacts.len()
+        );
         if s + 1 == steps || s < 2 {
             for &i in idx.iter().take(8) {
                 let x = p.position[i];

@@ -23,7 +23,7 @@ use super::cases::{cases_dir, column_geometry, dam_break_case, parse_case, read_
 use super::score::{score, Measure, RunOutcome};
 use super::unwind::catch_panic;
 use crate::analysis::reference;
-use crate::case::{self, Case, Scheme};
+use crate::case::{self, Case, Refinement, Scheme};
 use crate::math::Real;
 use crate::run::{self, RunStatus};
 use serde_json::{json, Value};
@@ -37,6 +37,8 @@ pub struct Variant {
     pub name: &'static str,
     pub description: &'static str,
     pub scheme: Scheme,
+    /// The layout every run of the variant gets (`case.refinement`).
+    pub refinement: Refinement,
 }
 
 /// The variants of issue 6: classic MPS, the default (HS + ECS + HL with GC), CHL and
@@ -49,11 +51,19 @@ pub fn variants() -> Vec<Variant> {
             description:
                 "Koshizuka & Oka 1996: minimum-pressure gradient, classic Laplacian, PND source",
             scheme: Scheme::classic(),
+            refinement: Refinement::Auto,
         },
         Variant {
             name: "default",
-            description: "the scheme block's defaults (HS + ECS source, HL Laplacian, GC gradient)",
+            description: "the scheme block's defaults (HS + ECS source, HL Laplacian, GC gradient) and the automatic multi-resolution layout",
             scheme: Scheme::default(),
+            refinement: Refinement::Auto,
+        },
+        Variant {
+            name: "uniform",
+            description: "the default scheme on one spacing everywhere (`\"refinement\": \"none\"`)",
+            scheme: Scheme::default(),
+            refinement: Refinement::None,
         },
         Variant {
             name: "chl",
@@ -63,6 +73,7 @@ pub fn variants() -> Vec<Variant> {
                 solver: SolverKind::Bicgstab,
                 ..Scheme::default()
             },
+            refinement: Refinement::Auto,
         },
         Variant {
             name: "least_squares",
@@ -73,6 +84,7 @@ pub fn variants() -> Vec<Variant> {
                 solver: SolverKind::Bicgstab,
                 ..Scheme::default()
             },
+            refinement: Refinement::Auto,
         },
     ]
 }
@@ -247,6 +259,10 @@ pub fn run_one(
         note: String::new(),
     };
     let case = match run_case_value(bench, spacing, &variant.scheme)
+        .map(|mut case| {
+            case.refinement = variant.refinement.clone();
+            case
+        })
         .and_then(|c| case::ValidCase::new(c, &case::Limits::default()))
     {
         Ok(c) => c,

@@ -25,8 +25,8 @@
 
 pub mod added_mass;
 
-pub use added_mass::AddedMass;
 pub use crate::case::prescribed::{Kinematics, PrescribedVelocity};
+pub use added_mass::AddedMass;
 
 use crate::case::{Case, Dof, Motion};
 use crate::engine::Simulation;

@@ -14,8 +14,8 @@
 //! The fine boxes of `"auto"` cover each moving body's swept path over the run,
 //! widened by [`AUTO_MARGIN`] body sizes on every side.
 
-use crate::case::{Case, Motion, Projection, Refinement, Scheme};
 use crate::case::prescribed::PrescribedVelocity;
+use crate::case::{Case, Motion, Projection, Refinement, Scheme};
 use crate::geometry::centroid;
 use crate::math::{rotate, vec2, Real, Vec2};
 use std::collections::HashMap;
@@ -49,7 +49,10 @@ impl FineBox {
 /// anisotropic, least squares) and the exact projection are single-resolution.
 pub fn unsupported_by_multi_resolution(scheme: &Scheme) -> Option<&'static str> {
     use crate::case::{GradientKind as G, LaplacianKind as L};
-    if !matches!(scheme.laplacian, L::HigherOrder | L::Classic | L::SecondOrder) {
+    if !matches!(
+        scheme.laplacian,
+        L::HigherOrder | L::Classic | L::SecondOrder
+    ) {
         return Some("scheme.laplacian must be higher_order, classic or second_order");
     }
     if matches!(scheme.gradient, G::Anisotropic | G::LeastSquares) {
@@ -98,7 +101,10 @@ fn swept_box(body: &crate::case::Body, case: &Case) -> Option<FineBox> {
     let poly: Vec<Vec2> = body.polygon.iter().map(|p| vec2(*p)).collect();
     let c = centroid(&poly);
     let radius = poly.iter().map(|p| (p - c).norm()).fold(0.0, Real::max);
-    let (mut lo, mut hi) = (Vec2::repeat(Real::INFINITY), Vec2::repeat(Real::NEG_INFINITY));
+    let (mut lo, mut hi) = (
+        Vec2::repeat(Real::INFINITY),
+        Vec2::repeat(Real::NEG_INFINITY),
+    );
     for p in &poly {
         lo = lo.inf(p);
         hi = hi.sup(p);
@@ -118,7 +124,10 @@ fn swept_box(body: &crate::case::Body, case: &Case) -> Option<FineBox> {
                 || table.iter().flatten().any(|s| s.angular_velocity != 0.0);
             let moves = turns
                 || vec2(*velocity).norm() > 0.0
-                || table.iter().flatten().any(|s| vec2(s.velocity).norm() > 0.0);
+                || table
+                    .iter()
+                    .flatten()
+                    .any(|s| vec2(s.velocity).norm() > 0.0);
             if !moves {
                 return None;
             }
@@ -148,7 +157,10 @@ fn swept_box(body: &crate::case::Body, case: &Case) -> Option<FineBox> {
         }
     };
     let position = vec2(body.position);
-    let (mut blo, mut bhi) = (Vec2::repeat(Real::INFINITY), Vec2::repeat(Real::NEG_INFINITY));
+    let (mut blo, mut bhi) = (
+        Vec2::repeat(Real::INFINITY),
+        Vec2::repeat(Real::NEG_INFINITY),
+    );
     for k in 0..=PATH_SAMPLES {
         let offset = position + path(end * k as Real / PATH_SAMPLES as Real);
         if turns {

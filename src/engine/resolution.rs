@@ -71,7 +71,9 @@ impl<'a> Scales<'a> {
             None => (1.0, 1.0),
             Some(s) => s
                 .iter()
-                .fold((Real::INFINITY, 0.0 as Real), |(lo, hi), &v| (lo.min(v), hi.max(v))),
+                .fold((Real::INFINITY, 0.0 as Real), |(lo, hi), &v| {
+                    (lo.min(v), hi.max(v))
+                }),
         }
     }
 }

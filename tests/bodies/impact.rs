@@ -168,7 +168,7 @@ fn user_wedge_15_degrees_with_defaults() {
 
 /// 30° deadrise, the shipped wedge's geometry in the user tank: similarity C_F = 14.04.
 #[test]
-#[ignore = "4 minutes on two cores; passes: +2.8 % (t0 0.38 ms)"]
+#[ignore = "90 s on two cores; passes: +1.7 % (t0 0.38 ms)"]
 fn user_wedge_30_degrees_with_defaults() {
     let err = wedge_error(30.0, 14.04);
     assert!(err.abs() < 0.05, "{:+.1} %", 100.0 * err);
@@ -176,7 +176,7 @@ fn user_wedge_30_degrees_with_defaults() {
 
 /// 40° deadrise: similarity C_F = 5.45.
 #[test]
-#[ignore = "5 minutes on two cores; fails at the bound: +5.0 % (the force lags while under two rows are wetted, t0 0.75 ms)"]
+#[ignore = "2 minutes on two cores; passes: +3.0 % (t0 0.75 ms: the force lags while under two rows are wetted)"]
 fn user_wedge_40_degrees_with_defaults() {
     let err = wedge_error(40.0, 5.45);
     assert!(err.abs() < 0.05, "{:+.1} %", 100.0 * err);
@@ -184,7 +184,7 @@ fn user_wedge_40_degrees_with_defaults() {
 
 /// 10° deadrise: similarity C_F = 211.7 (outside the 15-35° the defaults promise).
 #[test]
-#[ignore = "2 minutes on two cores; passes: -1.1 % (t0 0.16 ms, per-step scatter 0.99)"]
+#[ignore = "80 s on two cores; passes: +2.8 % (t0 0.16 ms, per-step scatter 0.99)"]
 fn user_wedge_10_degrees_with_defaults() {
     let err = wedge_error(10.0, 211.7);
     assert!(err.abs() < 0.05, "{:+.1} %", 100.0 * err);
@@ -192,7 +192,7 @@ fn user_wedge_10_degrees_with_defaults() {
 
 /// 25° deadrise: similarity C_F = 23.61.
 #[test]
-#[ignore = "3 minutes on two cores, kept out of CI for time; passes: -0.7 % (t0 0.27 ms, per-step scatter 0.51)"]
+#[ignore = "80 s on two cores, kept out of CI for time; passes: +0.4 % (t0 0.27 ms, per-step scatter 0.65)"]
 fn user_wedge_25_degrees_with_defaults() {
     let err = wedge_error(25.0, 23.61);
     assert!(err.abs() < 0.05, "{:+.1} %", 100.0 * err);
@@ -234,7 +234,7 @@ fn free_fall_error(mass: f64) -> (f64, f64) {
 
 /// The shipped free-fall wedge, 241 kg/m.
 #[test]
-#[ignore = "60 s on two cores; fails: mean -6.5 %, worst -9.3 % (the constant-velocity 30° wedge reads -7.1 % from the keel contact at 5 mm)"]
+#[ignore = "45 s on two cores; fails: mean -5.7 %, worst -8.6 % (the constant-velocity 30° wedge reads -3.8 % from the keel contact at 5 mm)"]
 fn shipped_free_fall_wedge_at_its_spacing() {
     let (mean, worst) = free_fall_error(241.0);
     assert!(
@@ -247,7 +247,7 @@ fn shipped_free_fall_wedge_at_its_spacing() {
 /// reaches the body's own at the chine (h = 0.092 m), Wagner's rho pi c²/2 (98 kg/m
 /// there) 1.6 times it.
 #[test]
-#[ignore = "60 s on two cores; fails: mean -6.2 %, worst -7.4 %"]
+#[ignore = "100 s on two cores; fails: mean -6.4 %, worst -7.4 %"]
 fn light_free_fall_wedge_at_its_spacing() {
     let (mean, worst) = free_fall_error(60.25);
     assert!(
@@ -305,13 +305,13 @@ fn cfl_reads_as_half_the_cfl(l0: f64) {
 }
 
 #[test]
-#[ignore = "160 s on two cores; passes: C_F 13.82 ± 0.44 at CFL 0.2 against 12.93 ± 0.16 at 0.1, 1.9 standard errors apart"]
+#[ignore = "160 s on two cores; passed on the uniform layout: C_F 13.82 ± 0.44 at CFL 0.2 against 12.93 ± 0.16 at 0.1, 1.9 standard errors apart"]
 fn the_default_cfl_reads_as_half_of_it_at_1_cm() {
     cfl_reads_as_half_the_cfl(0.01);
 }
 
 #[test]
-#[ignore = "60 minutes on two cores; fails: C_F 14.34 ± 0.09 at CFL 0.2 against 13.96 ± 0.12 at 0.1, 2.6 standard errors apart (both within 2.1 % of 14.04)"]
+#[ignore = "30 minutes on two cores; failed on the uniform layout: C_F 14.34 ± 0.09 at CFL 0.2 against 13.96 ± 0.12 at 0.1, 2.6 standard errors apart (both within 2.1 % of 14.04)"]
 fn the_default_cfl_reads_as_half_of_it_at_5_mm() {
     cfl_reads_as_half_the_cfl(0.005);
 }

@@ -64,7 +64,10 @@ fn coarsening_partitions_the_fluid_and_keeps_the_fine_boxes_fine() {
         // centred on 2 x 2 sites of the lattice: at odd multiples of l0
         for c in [p.x, p.y] {
             let k = c / L0;
-            assert!((k - k.round()).abs() < 1e-9 && k.round() as i64 % 2 == 1, "{p:?}");
+            assert!(
+                (k - k.round()).abs() < 1e-9 && k.round() as i64 % 2 == 1,
+                "{p:?}"
+            );
         }
         assert!((vel[i] - Vec2::new(0.1, 0.0)).norm() < 1e-12);
     }
@@ -143,9 +146,17 @@ fn still_water_with_a_resolution_jump_stays_still_with_the_exact_load() {
     }
     assert_eq!(sim.stats.removed, 0);
     assert!(max_speed < 1e-3, "max speed {max_speed:.3e} m/s");
-    assert!(worst_load < 1e-3, "tank load off by {:.4} %", 100.0 * worst_load);
+    assert!(
+        worst_load < 1e-3,
+        "tank load off by {:.4} %",
+        100.0 * worst_load
+    );
     let flux = (fine_volume(&sim) - fine_start).abs() / fine_start;
-    assert!(flux < 1e-3, "net flux across the jump {:.4} %", 100.0 * flux);
+    assert!(
+        flux < 1e-3,
+        "net flux across the jump {:.4} %",
+        100.0 * flux
+    );
     println!(
         "max speed {max_speed:.2e} m/s, tank load within {:.5} %, flux {:.5} %",
         100.0 * worst_load,

@@ -78,7 +78,18 @@ fn loads(x: &[Vec2], walls: &[PlacedWall]) -> Vec<(Vec2, f64)> {
     let p: Vec<f64> = x.iter().map(|q| RHO * G * (DEPTH - q.y)).collect();
     let grid = CellGrid::build(x, re);
     let w = |d: f64| Koshizuka::w(d, re);
-    pressure_loads(x, &p, Scales::UNIFORM, &grid, walls, &w, RHO, Vec2::new(0.0, -G), L0, re)
+    pressure_loads(
+        x,
+        &p,
+        Scales::UNIFORM,
+        &grid,
+        walls,
+        &w,
+        RHO,
+        Vec2::new(0.0, -G),
+        L0,
+        re,
+    )
 }
 
 fn assert_close(what: &str, got: f64, expected: f64, tol: f64) {

@@ -80,8 +80,8 @@ pub(super) fn divergence<K: Kernel>(
 /// of n carried from x* to the corrected positions to first order.
 pub(super) fn update_number_density_and_divergence<K: Kernel>(sim: &mut Simulation) {
     let (x, xs) = (&sim.particles.position, &sim.workspace.scratch.x_star);
-    let cloud = Cloud::new(x, &sim.workspace.neighbors, sim.config.params.re)
-        .with_scales(sim.scales());
+    let cloud =
+        Cloud::new(x, &sim.workspace.neighbors, sim.config.params.re).with_scales(sim.scales());
     let contacts = &sim.workspace.contacts;
     let n: Vec<Real> = (0..x.len())
         .into_par_iter()

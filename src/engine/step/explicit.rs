@@ -96,7 +96,8 @@ pub(super) fn apply_explicit_forces<K: Kernel>(
                     .sum();
                 if total > 0.0 {
                     let share = aw * (ct.terms.laplacian_sum / total);
-                    loads[ct.object as usize].viscous_force -= share * (m * volumes.get(i).copied().unwrap_or(1.0));
+                    loads[ct.object as usize].viscous_force -=
+                        share * (m * volumes.get(i).copied().unwrap_or(1.0));
                 }
             }
         }

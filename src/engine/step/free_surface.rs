@@ -108,9 +108,7 @@ pub(super) fn release_isolated_clusters(sim: &mut Simulation) {
                 && 2 * nb
                     .of(i)
                     .iter()
-                    .filter(|&&j| {
-                        (x[j as usize] - x[i]).norm() < re * scales.pair(i, j as usize).0
-                    })
+                    .filter(|&&j| (x[j as usize] - x[i]).norm() < re * scales.pair(i, j as usize).0)
                     .count()
                     < lattice_neighbours
         })
