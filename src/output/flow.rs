@@ -377,14 +377,15 @@ pub fn flow_svg(
         // half a spacing plus half a pixel: the marks are rounded to whole pixels, and
         // without the overlap the rounding leaves white seams between neighbours
         let pixel = (x1 - x0) / PLOT_WIDTH as Real;
-        let half = 0.5
-            * (snapshot
-                .particles
-                .field_data
-                .get("particle_spacing")
-                .copied()
-                .unwrap_or(0.0)
-                + pixel);
+        // each particle's own spacing in a multi-resolution snapshot
+        let uniform = snapshot
+            .particles
+            .field_data
+            .get("particle_spacing")
+            .copied()
+            .unwrap_or(0.0);
+        let own = snapshot.particles.scalar("spacing");
+        let half = |k: usize| 0.5 * (own.map_or(uniform, |s| s[k]) + pixel);
         let inside = |p: &[Real; 3]| p[0] >= x0 && p[0] <= x1 && p[1] >= y0 && p[1] <= y1;
         chart
             .draw_series(
@@ -393,8 +394,10 @@ pub fn flow_svg(
                     .points
                     .iter()
                     .zip(&values)
-                    .filter(|(p, _)| inside(p))
-                    .map(|(p, v)| {
+                    .enumerate()
+                    .filter(|(_, (p, _))| inside(p))
+                    .map(|(k, (p, v))| {
+                        let half = half(k);
                         Rectangle::new(
                             [(p[0] - half, p[1] - half), (p[0] + half, p[1] + half)],
                             colour_map((v - lo) / (hi - lo)).filled(),

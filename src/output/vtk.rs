@@ -25,6 +25,9 @@ pub struct VtuFields<'a> {
     /// snapshot alone can be drawn (marker size, pressure coefficient).
     pub density: Option<Real>,
     pub spacing: Option<Real>,
+    /// Each particle's spacing (m) of a multi-resolution layout, written as the point
+    /// array `spacing`; None for one spacing (the field data's `particle_spacing`).
+    pub particle_spacing: Option<Vec<Real>>,
 }
 
 /// The surface of one wall or body at its pose, for the walls grid.
@@ -185,6 +188,9 @@ pub fn vtu_string(fields: &VtuFields<'_>, time: Real) -> String {
         "free_surface",
         fields.free_surface.iter().map(|f| u8::from(*f)),
     );
+    if let Some(s) = &fields.particle_spacing {
+        push_scalars(&mut out, "spacing", s.iter().copied());
+    }
     out.push_str("      </PointData>\n");
     push_geometry(&mut out, fields.position, 0..n, 1..=n, VTK_VERTEX, n);
     out

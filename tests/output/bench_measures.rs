@@ -536,6 +536,7 @@ fn the_surge_front_history_reads_the_particles_part_of_each_snapshot() {
             free_surface: &surface,
             density: None,
             spacing: Some(l0),
+            particle_spacing: None,
         };
         let (p, w) = (format!("step_{k:06}.vtu"), format!("walls_{k:06}.vtu"));
         std::fs::write(snapshots.join(&p), vtu_string(&fields, time)).unwrap();

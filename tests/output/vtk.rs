@@ -31,6 +31,7 @@ fn vtu_round_trips_points_and_point_data() {
         free_surface: &free_surface,
         density: Some(998.2),
         spacing: Some(0.01),
+        particle_spacing: None,
     };
     let grid = parse_vtu(&vtu_string(&fields, 0.125)).unwrap();
     assert_eq!(grid.points.len(), n);
@@ -84,6 +85,7 @@ fn the_reader_rejects_truncated_or_inconsistent_files() {
             free_surface: &f,
             density: None,
             spacing: None,
+            particle_spacing: None,
         },
         0.0,
     );
