@@ -34,6 +34,17 @@ pub fn check(case_path: &Path, overrides: &[String], max_particles: Option<usize
         "particles: {particles} (estimate from block areas: {:.0})",
         estimated_particles(&case).unwrap_or(0.0)
     );
+    let coarse = scene.particles.scale.iter().filter(|&&s| s != 1.0).count();
+    if coarse > 0 {
+        println!(
+            "layout: multi-resolution, {} particles of {} m and {coarse} of {} m (refinement)",
+            particles - coarse,
+            case.particle_spacing,
+            2.0 * case.particle_spacing
+        );
+    } else {
+        println!("layout: one spacing, {} m", case.particle_spacing);
+    }
     println!(
         "estimated steps: {} (end time {} s, cfl {}, max_dt {} s)",
         estimate_steps(&case),

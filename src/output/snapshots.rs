@@ -84,9 +84,10 @@ impl SnapshotWriter {
             free_surface: &p.free_surface,
             density: Some(sim.config.params.density),
             spacing: Some(sim.config.params.l0),
-            particle_spacing: sim.config.multi_resolution.then(|| {
-                p.scale.iter().map(|s| s * sim.config.params.l0).collect()
-            }),
+            particle_spacing: sim
+                .config
+                .multi_resolution
+                .then(|| p.scale.iter().map(|s| s * sim.config.params.l0).collect()),
         };
         let file = snapshot_file_name(sim.steps);
         write_atomically(&self.dir.join(&file), &vtu_string(&fields, sim.time))?;

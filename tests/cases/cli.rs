@@ -411,3 +411,39 @@ fn plot_draws_a_snapshot_of_a_run_and_refuses_what_it_cannot_draw() {
         text(&none.stderr)
     );
 }
+
+#[test]
+fn check_reports_the_layout_of_each_spacing() {
+    let wedge = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("cases")
+        .join("wedge_30deg_constant_velocity.json");
+    let wedge = wedge.to_str().unwrap();
+    let case = load_case_file(
+        std::path::Path::new(wedge),
+        &["particle_spacing=0.02".into()],
+    )
+    .unwrap();
+    let scene = build_scene(&case, &MpsParameters::new(&case));
+    let fine = scene.particles.scale.iter().filter(|&&s| s == 1.0).count();
+    let coarse = scene.particles.len() - fine;
+    assert!(fine > 0 && coarse > 0, "{fine} fine, {coarse} coarse");
+    let out = mpsfsi(&["check", wedge, "--set", "particle_spacing=0.02"]);
+    let stdout = text(&out.stdout);
+    assert!(out.status.success(), "{}", text(&out.stderr));
+    assert!(
+        stdout.contains(&format!(
+            "layout: multi-resolution, {fine} particles of 0.02 m and {coarse} of 0.04 m"
+        )),
+        "{stdout}"
+    );
+    let out = mpsfsi(&[
+        "check",
+        wedge,
+        "--set",
+        "particle_spacing=0.02",
+        "--set",
+        "refinement=\"none\"",
+    ]);
+    let stdout = text(&out.stdout);
+    assert!(stdout.contains("layout: one spacing, 0.02 m"), "{stdout}");
+}
