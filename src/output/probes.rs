@@ -1,5 +1,6 @@
 //! Pressure probes: the MPS weighted average of particle pressures around a point,
-//! p = Σ w(|x_j - x|) p_j / Σ w (kernel of the scheme at r_e).
+//! p = Σ w(|x_j - x|) p_j / Σ w (kernel of the scheme at r_e; with multi-resolution each
+//! particle at its own radius, w(d; r_e s_j) = w(d/s_j; r_e)).
 
 use crate::engine::kernel::weight;
 use crate::engine::Simulation;
@@ -15,12 +16,15 @@ pub struct ProbePoint {
 pub fn sample(sim: &Simulation, probes: &[ProbePoint]) -> Vec<(String, Real)> {
     let re = sim.config.params.re;
     let kind = sim.config.method.kernel;
+    let scales = sim.scales();
     probes
         .iter()
         .map(|probe| {
             let (mut sw, mut swp) = (0.0, 0.0);
-            for (x, p) in sim.particles.position.iter().zip(&sim.particles.pressure) {
-                let r = (x - probe.position).norm();
+            let particles = sim.particles.position.iter().zip(&sim.particles.pressure);
+            for (j, (x, p)) in particles.enumerate() {
+                let s = scales.of(j);
+                let r = (x - probe.position).norm() / s;
                 if r < re {
                     let w = weight(kind, r.max(0.05 * sim.config.params.l0), re);
                     sw += w;
