@@ -62,6 +62,72 @@ fn fixed_submerged_body_carries_its_buoyancy() {
     }
 }
 
+/// The same buoyancy with a resolution jump across the water column: 1 cm in a box
+/// around the body (0.1 m beyond it to the sides and below, up through the surface), 2 cm
+/// elsewhere, so the jump runs beside, under and over the body. The hydrostatic ghosts
+/// and the corrected gradient keep still water exact across the jump, so the body
+/// carries ρ g A within the same 2 %.
+#[test]
+fn fixed_submerged_body_carries_its_buoyancy_across_a_resolution_jump() {
+    let wedge_area = 0.5 * 0.3 - 0.25 * 0.1443;
+    for (name, polygon, position, area, fine) in [
+        (
+            "box",
+            BOX,
+            "[0.0, -0.35]",
+            0.4 * 0.2,
+            "[[-0.3, -0.45], [0.3, 0.1]]",
+        ),
+        (
+            "wedge",
+            WEDGE,
+            "[0.0011, -0.4]",
+            wedge_area,
+            "[[-0.35, -0.5], [0.35, 0.1]]",
+        ),
+    ] {
+        let fine: Vec<Vec<f64>> = serde_json::from_str(fine).unwrap();
+        let case = shipped(
+            "floating_box.json",
+            &[
+                format!("bodies.0.polygon={polygon}"),
+                format!("bodies.0.position={position}"),
+                r#"bodies.0.motion={"type": "prescribed", "velocity": [0.0, 0.0]}"#.into(),
+                format!(
+                    r#"refinement={{"fine": [{{"min": {:?}, "max": {:?}}}]}}"#,
+                    fine[0], fine[1]
+                ),
+            ],
+        );
+        let expect = RHO * 9.81 * area;
+        let trace = run(&case, CouplingOptions::default(), Some(0.4), |sim| {
+            assert!(sim.config.multi_resolution, "two levels");
+        });
+        assert!(trace.error.is_none(), "{name}: {:?}", trace.error);
+        let k = trace.wall("box");
+        let late: Vec<_> = trace.steps.iter().filter(|s| s.time > 0.3).collect();
+        let duration: f64 = late.iter().map(|s| s.dt).sum();
+        let fy = late.iter().map(|s| s.force[k].y * s.dt).sum::<f64>() / duration;
+        let fx = late.iter().map(|s| s.force[k].x * s.dt).sum::<f64>() / duration;
+        let err = (fy - expect) / expect;
+        println!(
+            "buoyancy of the {name} across a jump: F_y = {fy:.2} N/m vs rho g A = {expect:.2} N/m ({:+.2} %), F_x = {fx:.2} N/m, {} particles, {} steps",
+            100.0 * err,
+            trace.particles,
+            trace.steps.len(),
+        );
+        assert!(
+            err.abs() < 0.02,
+            "{name}: buoyancy off by {:.2} %",
+            100.0 * err
+        );
+        assert!(
+            fx.abs() < 0.02 * expect,
+            "{name}: net horizontal force {fx:.2} N/m on a symmetric body"
+        );
+    }
+}
+
 /// The floating box's polygon in its body frame (0.4 m x 0.2 m, origin mid-bottom).
 const BOX: &str = "[[-0.2, 0.0], [0.2, 0.0], [0.2, 0.2], [-0.2, 0.2]]";
 /// The 30° wedge of the slamming cases, breadth 0.5 m, 0.3 m high, apex at the origin.
