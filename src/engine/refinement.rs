@@ -98,6 +98,9 @@ pub fn fine_boxes(case: &Case) -> Option<Vec<FineBox>> {
 /// (ballistic, an overestimate of the path in water); a rotating body is swept as its
 /// bounding circle about the centroid.
 fn swept_box(body: &crate::case::Body, case: &Case) -> Option<FineBox> {
+    if !super::scene::moves(body) {
+        return None;
+    }
     let poly: Vec<Vec2> = body.polygon.iter().map(|p| vec2(*p)).collect();
     let c = centroid(&poly);
     let radius = poly.iter().map(|p| (p - c).norm()).fold(0.0, Real::max);
@@ -122,15 +125,6 @@ fn swept_box(body: &crate::case::Body, case: &Case) -> Option<FineBox> {
             let v = PrescribedVelocity::new(*velocity, *angular_velocity, table.as_ref());
             let turns = *angular_velocity != 0.0
                 || table.iter().flatten().any(|s| s.angular_velocity != 0.0);
-            let moves = turns
-                || vec2(*velocity).norm() > 0.0
-                || table
-                    .iter()
-                    .flatten()
-                    .any(|s| vec2(s.velocity).norm() > 0.0);
-            if !moves {
-                return None;
-            }
             let h = end / PATH_SAMPLES as Real;
             (
                 Box::new(move |t: Real| {

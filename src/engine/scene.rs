@@ -232,7 +232,7 @@ fn mirror_shift(axis: Real, column: Real, l0: Real) -> Real {
 }
 
 /// Does the body move: a free body, or a prescribed one with a velocity?
-fn moves(body: &crate::case::Body) -> bool {
+pub(super) fn moves(body: &crate::case::Body) -> bool {
     match &body.motion {
         Motion::Free { .. } => true,
         Motion::Prescribed {

@@ -217,14 +217,15 @@ pub fn pressure_gradient<K: Kernel>(
         let r = x[j] - x[i];
         let d2 = r.norm_squared();
         let d = d2.sqrt();
-        let (re, v) = cloud.pair(i, j);
+        let (s, v) = cloud.scales.pair(i, j);
+        let re = cloud.re * s;
         if d >= re || d == 0.0 {
             continue;
         }
         let w = K::w(d, re) / d2 * v;
         s_fluid += r * ((p[j] - p[i]) * w);
         s_min += r * ((p[j] - p_min[i]) * w);
-        if d < g.close * cloud.scales.pair(i, j).0 {
+        if d < g.close * s {
             s_close += r * w;
         }
         s_sym += if cmps {

@@ -76,13 +76,10 @@ pub(super) fn apply_explicit_forces<K: Kernel>(
         })
         .collect();
     let m = sim.config.params.particle_mass;
-    let volumes: Vec<Real> = match scales.is_uniform() {
-        true => Vec::new(),
-        false => sim.particles.scale.iter().map(|s| s * s).collect(),
-    };
     for (i, (a, _)) in accel.iter().enumerate() {
         sim.particles.velocity[i] += a * dt;
     }
+    let scales = Scales::new(&sim.particles.scale, sim.config.multi_resolution);
     for (i, (_, aw)) in accel.iter().enumerate() {
         if i < sim.workspace.neighbors.len() {
             for ct in sim.workspace.contacts.of(i) {
@@ -96,8 +93,7 @@ pub(super) fn apply_explicit_forces<K: Kernel>(
                     .sum();
                 if total > 0.0 {
                     let share = aw * (ct.terms.laplacian_sum / total);
-                    loads[ct.object as usize].viscous_force -=
-                        share * (m * volumes.get(i).copied().unwrap_or(1.0));
+                    loads[ct.object as usize].viscous_force -= share * (m * scales.volume(i));
                 }
             }
         }
