@@ -3,7 +3,6 @@
 
 use crate::engine::config::SpacingControl;
 use crate::engine::kernel::Kernel;
-use crate::engine::resolution::Scales;
 use crate::engine::simulation::{Simulation, WallLoad};
 use crate::engine::walls::{moment_about, PlacedWall};
 use crate::math::{Real, Vec2};
@@ -21,16 +20,9 @@ pub(super) fn keep_particles_apart(
     let e = sim.config.method.restitution;
     let m = sim.config.params.particle_mass;
     let n = sim.particles.len();
-    // a copy: the loops below move the particles (empty for a uniform run)
-    let multi = sim.config.multi_resolution;
-    let scale = if multi {
-        sim.particles.scale.clone()
-    } else {
-        Vec::new()
-    };
-    let scales = Scales::new(&scale, multi);
     if let SpacingControl::Collision { distance } = sim.config.method.spacing_control {
         let rc = distance * l0;
+        let scales = sim.scales();
         let (x, u, nb) = (
             &sim.particles.position,
             &sim.particles.velocity,
@@ -65,7 +57,11 @@ pub(super) fn keep_particles_apart(
     if rw > 0.0 {
         for i in 0..n {
             for c in sim.workspace.contacts.of(i) {
-                let rw = rw * scales.of(i);
+                // the particle's own safety distance and mass
+                let (rw, m) = {
+                    let s = sim.scales();
+                    (rw * s.of(i), m * s.volume(i))
+                };
                 if c.distance >= rw && !c.penetrated {
                     continue;
                 }
@@ -82,7 +78,7 @@ pub(super) fn keep_particles_apart(
                     pos = c.point + c.normal * (0.5 * rw);
                 }
                 sim.particles.position[i] = pos;
-                let f = -du * (m * scales.volume(i) / dt);
+                let f = -du * (m / dt);
                 let load = &mut loads[c.object as usize];
                 load.repulsion_force += f;
                 load.repulsion_moment +=
