@@ -305,7 +305,7 @@ fn cfl_reads_as_half_the_cfl(l0: f64) {
 }
 
 #[test]
-#[ignore = "160 s on two cores; passed on the uniform layout: C_F 13.82 ± 0.44 at CFL 0.2 against 12.93 ± 0.16 at 0.1, 1.9 standard errors apart"]
+#[ignore = "100 s on two cores; passes: C_F 13.59 ± 0.27 at CFL 0.2 against 12.96 ± 0.23 at 0.1, 1.8 standard errors apart"]
 fn the_default_cfl_reads_as_half_of_it_at_1_cm() {
     cfl_reads_as_half_the_cfl(0.01);
 }
