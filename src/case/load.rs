@@ -26,11 +26,77 @@ pub fn parse_case_str(text: &str) -> Result<Case, CaseError> {
 
 /// Deserialize a case, naming the field path of the first type error.
 pub fn parse_case_value(value: Value) -> Result<Case, CaseError> {
+    check_objects(&value, &case_schema()["properties"], "")?;
     serde_path_to_error::deserialize(value).map_err(|e| {
         let path = e.path().to_string();
         let path = if path == "." { String::new() } else { path };
         CaseError::new(path, e.into_inner().to_string())
     })
+}
+
+/// The case schema as a JSON value, generated once.
+fn case_schema() -> &'static Value {
+    static SCHEMA: std::sync::OnceLock<Value> = std::sync::OnceLock::new();
+    SCHEMA.get_or_init(|| {
+        serde_json::to_value(schemars::schema_for!(Case)).expect("a JSON Schema serialises")
+    })
+}
+
+/// Objects must be JSON objects. serde's derived structs also read a JSON array as
+/// their fields in order, so `"output": [null, null]` passed as an output block with two
+/// nulls; the schema forbids it. Walks the object `value` beside the schema's
+/// `properties` and rejects, with its field path, a value that is not an object where
+/// the schema has one (through `$ref`s and arrays' items; a field under `anyOf`/`oneOf`
+/// is left to serde).
+fn check_objects(value: &Value, properties: &Value, path: &str) -> Result<(), CaseError> {
+    let Some(fields) = value.as_object() else {
+        return Ok(());
+    };
+    for (name, v) in fields {
+        let field = if path.is_empty() {
+            name.clone()
+        } else {
+            format!("{path}.{name}")
+        };
+        check_node(v, &properties[name], &field)?;
+    }
+    Ok(())
+}
+
+fn check_node(value: &Value, node: &Value, path: &str) -> Result<(), CaseError> {
+    let node = match node["$ref"].as_str() {
+        Some(r) => &case_schema()["$defs"][r.trim_start_matches("#/$defs/")],
+        None => node,
+    };
+    match node["type"].as_str() {
+        Some("object") => {
+            if !value.is_object() {
+                return Err(CaseError::new(
+                    path,
+                    format!("expected an object {{…}}, got {}", kind(value)),
+                ));
+            }
+            check_objects(value, &node["properties"], path)
+        }
+        Some("array") => {
+            for (k, item) in value.as_array().into_iter().flatten().enumerate() {
+                check_node(item, &node["items"], &format!("{path}[{k}]"))?;
+            }
+            Ok(())
+        }
+        _ => Ok(()),
+    }
+}
+
+fn kind(value: &Value) -> &'static str {
+    match value {
+        Value::Null => "null",
+        Value::Bool(_) => "a boolean",
+        Value::Number(_) => "a number",
+        Value::String(_) => "a string",
+        Value::Array(_) => "an array",
+        Value::Object(_) => "an object",
+    }
 }
 
 /// Apply one `PATH=VALUE` override. VALUE is parsed as JSON, or taken as a string when

@@ -692,3 +692,24 @@ fn refinement_forms_and_their_errors() {
         "scheme.laplacian",
     );
 }
+
+#[test]
+fn an_array_where_the_schema_has_an_object_is_rejected_with_its_path() {
+    // serde's derived structs also read an array of their fields in order: the output
+    // block has optional fields first, so `[null, null]` used to pass as one
+    for (edit, path) in [
+        (json!({ "output": [null, null] }), "output"),
+        (json!({ "fluid": [] }), "fluid"),
+    ] {
+        let mut v = base_value();
+        for (k, value) in edit.as_object().unwrap() {
+            v[k] = value.clone();
+        }
+        let e = parse_case_value(v).expect_err("an array is not an object");
+        assert_error(&e, path, "expected an object");
+    }
+    let mut v = base_value();
+    v["fluid_blocks"][0] = json!([[[0.0, 0.0], [1.0, 0.0], [1.0, 1.0]]]);
+    let e = parse_case_value(v).expect_err("a block is an object");
+    assert_error(&e, "fluid_blocks[0]", "got an array");
+}
