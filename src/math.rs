@@ -29,6 +29,40 @@ pub fn rotate(a: Vec2, angle: Real) -> Vec2 {
     Vec2::new(c * a.x - s * a.y, s * a.x + c * a.y)
 }
 
+/// Σ f(i, &mut y[i]) over i, where f may update y[i] in place: a fused pass over a
+/// vector that gives, bit for bit, the sum [`deterministic_sum`] would give in a
+/// separate pass (the same chunks, summed in the same order). `parallel` lets short
+/// vectors stay on one thread.
+pub fn deterministic_sum_mut<F>(y: &mut [Real], parallel: bool, f: F) -> Real
+where
+    F: Fn(usize, &mut Real) -> Real + Sync,
+{
+    use rayon::prelude::*;
+    let chunk_sum = |c: usize, ys: &mut [Real]| {
+        let mut s = 0.0;
+        for (k, v) in ys.iter_mut().enumerate() {
+            s += f(c * SUM_CHUNK + k, v);
+        }
+        s
+    };
+    if !parallel {
+        let mut total = 0.0;
+        for (c, ys) in y.chunks_mut(SUM_CHUNK).enumerate() {
+            total += chunk_sum(c, ys);
+        }
+        return total;
+    }
+    let partial: Vec<Real> = y
+        .par_chunks_mut(SUM_CHUNK)
+        .enumerate()
+        .map(|(c, ys)| chunk_sum(c, ys))
+        .collect();
+    partial.iter().sum()
+}
+
+/// The fixed chunk of the deterministic sums.
+const SUM_CHUNK: usize = 2048;
+
 /// Sum of `f(i)` for `i in 0..n` whose result does not depend on the number of
 /// threads: fixed chunks are summed in parallel, the partial sums in index order.
 pub fn deterministic_sum<F>(n: usize, f: F) -> Real
@@ -36,7 +70,7 @@ where
     F: Fn(usize) -> Real + Sync,
 {
     use rayon::prelude::*;
-    const CHUNK: usize = 2048;
+    const CHUNK: usize = SUM_CHUNK;
     let chunks = n.div_ceil(CHUNK);
     if chunks <= 8 {
         let mut total = 0.0;

@@ -46,15 +46,6 @@ where
     }
 }
 
-#[inline(always)]
-fn row_dot(m: &CsrMatrix, i: usize, x: &[Real]) -> Real {
-    let mut s = 0.0;
-    for k in m.row_ptr[i]..m.row_ptr[i + 1] {
-        s += m.val[k] * x[m.col[k] as usize];
-    }
-    s
-}
-
 /// Rows of a matrix built chunk by chunk: (row lengths, columns, values).
 type RowChunk = (Vec<usize>, Vec<u32>, Vec<Real>);
 
@@ -368,7 +359,7 @@ impl Coarsest {
                 for_rows(x, |i, xi| *xi = smoother[i] * b[i]);
                 for _ in 1..COARSE_SWEEPS {
                     for_rows(tmp, |i, ti| {
-                        *ti = x[i] + smoother[i] * (b[i] - row_dot(a, i, x))
+                        *ti = x[i] + smoother[i] * (b[i] - a.row_dot(i, x))
                     });
                     x.copy_from_slice(tmp);
                 }
@@ -693,21 +684,21 @@ fn cycle(
     for_rows(x, |i, xi| *xi = s[i] * b[i]);
     {
         let x: &[Real] = x;
-        for_rows(res, |i, ri| *ri = b[i] - row_dot(a, i, x));
+        for_rows(res, |i, ri| *ri = b[i] - a.row_dot(i, x));
     }
     {
         let res: &[Real] = res;
-        for_rows(bc, |c, v| *v = row_dot(&level.r, c, res));
+        for_rows(bc, |c, v| *v = level.r.row_dot(c, res));
     }
     cycle(rest, rest_work, coarsest, None, bc, xc);
     // prolongation and post-smoothing
     {
         let xc: &[Real] = xc;
-        for_rows(x, |i, xi| *xi += row_dot(&level.p, i, xc));
+        for_rows(x, |i, xi| *xi += level.p.row_dot(i, xc));
     }
     {
         let x: &[Real] = x;
-        for_rows(res, |i, ri| *ri = x[i] + s[i] * (b[i] - row_dot(a, i, x)));
+        for_rows(res, |i, ri| *ri = x[i] + s[i] * (b[i] - a.row_dot(i, x)));
     }
     x.copy_from_slice(res);
 }

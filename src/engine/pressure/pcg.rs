@@ -4,7 +4,7 @@
 
 use super::amg::Hierarchy;
 use super::{CsrMatrix, SolveError, SolveInfo, SolveParams};
-use crate::math::{deterministic_sum, Real};
+use crate::math::{deterministic_sum, deterministic_sum_mut, Real};
 use rayon::prelude::*;
 
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -63,6 +63,23 @@ where
         .with_min_len(1024)
         .enumerate()
         .for_each(|(i, v)| f(i, v));
+}
+
+/// x += alpha p, then p = z + beta p, in one pass.
+fn update_iterate(x: &mut [Real], p: &mut [Real], z: &[Real], alpha: Real, beta: Real) {
+    let update = |(i, (xi, pi)): (usize, (&mut Real, &mut Real))| {
+        *xi += alpha * *pi;
+        *pi = z[i] + beta * *pi;
+    };
+    if x.len() < PARALLEL_MIN {
+        x.iter_mut().zip(p.iter_mut()).enumerate().for_each(update);
+    } else {
+        x.par_iter_mut()
+            .zip(p.par_iter_mut())
+            .with_min_len(1024)
+            .enumerate()
+            .for_each(update);
+    }
 }
 
 /// Zero-fill incomplete Cholesky factor L (lower, CSR of the lower triangle incl. diagonal).
@@ -261,20 +278,27 @@ pub(crate) fn pcg_with(
                 relative_residual: rel,
             });
         }
-        a.mul(&p, &mut q);
-        let pq = dot(&p, &q);
+        // fused passes: q = A p with p·q, r -= alpha q with r·r, and x += alpha p with
+        // p = z + beta p; each sum is the one a separate `dot` gives, bit for bit
+        let parallel = n >= PARALLEL_MIN / 4;
+        let pq = deterministic_sum_mut(&mut q, parallel, |i, qi| {
+            *qi = a.row_dot(i, &p);
+            p[i] * *qi
+        });
         if !(pq.is_finite()) || pq == 0.0 {
             return Err(SolveError::Breakdown);
         }
         let alpha = rz / pq;
-        axpy(x, alpha, &p);
-        axpy(&mut r, -alpha, &q);
+        let rr = deterministic_sum_mut(&mut r, parallel, |i, ri| {
+            *ri += -alpha * q[i];
+            *ri * *ri
+        });
         precondition(&r, &mut z);
         let rz_new = dot(&r, &z);
         let beta = rz_new / rz;
         rz = rz_new;
-        for_each_index(&mut p, |i, pi| *pi = z[i] + beta * *pi);
-        rel = dot(&r, &r).sqrt() / bnorm;
+        update_iterate(x, &mut p, &z, alpha, beta);
+        rel = rr.sqrt() / bnorm;
         if !rel.is_finite() {
             return Err(SolveError::Breakdown);
         }
