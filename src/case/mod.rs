@@ -4,6 +4,7 @@
 //! Unknown fields are rejected (`deny_unknown_fields`): a typo in a case must not be
 //! silently ignored.
 
+pub mod layout;
 mod load;
 pub mod prescribed;
 mod refinement;

@@ -123,9 +123,10 @@ pub fn build_scene(case: &Case, params: &MpsParameters) -> Scene {
         }
     }
     // 1b. the first moving body's axis off the lattice's mirror lines
-    if let (Some(body), Some(&(first, _))) =
-        (case.bodies.iter().find(|b| moves(b)), candidates.first())
-    {
+    if let (Some(body), Some(&(first, _))) = (
+        case.bodies.iter().find(|b| crate::case::layout::moves(b)),
+        candidates.first(),
+    ) {
         let shift = mirror_shift(body_axis(body), first.x, l0);
         for (p, _) in &mut candidates {
             p.x += shift;
@@ -190,7 +191,7 @@ pub fn build_scene(case: &Case, params: &MpsParameters) -> Scene {
         vel.push(v);
     }
     // 4. multi-resolution: 2 × 2 sites merged outside the fine boxes
-    let particles = match super::refinement::fine_boxes(case) {
+    let particles = match crate::case::layout::fine_boxes(case) {
         None => Particles::with_positions(pos, vel),
         Some(boxes) => {
             let (pos, vel, scale) =
@@ -228,25 +229,6 @@ fn mirror_shift(axis: Real, column: Real, l0: Real) -> Real {
         off - clear
     } else {
         off + clear
-    }
-}
-
-/// Does the body move: a free body, or a prescribed one with a velocity?
-pub(super) fn moves(body: &crate::case::Body) -> bool {
-    match &body.motion {
-        Motion::Free { .. } => true,
-        Motion::Prescribed {
-            velocity,
-            angular_velocity,
-            table,
-        } => {
-            vec2(*velocity).norm() > 0.0
-                || *angular_velocity != 0.0
-                || table
-                    .iter()
-                    .flatten()
-                    .any(|s| vec2(s.velocity).norm() > 0.0 || s.angular_velocity != 0.0)
-        }
     }
 }
 

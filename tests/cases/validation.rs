@@ -418,8 +418,9 @@ fn velocity_table_not_increasing() {
 
 #[test]
 fn particle_count_above_the_limit() {
-    // 0.6 m x 0.3 m at l0 = 0.01: 1800 particles
-    let case = base_case();
+    // 0.6 m x 0.3 m at l0 = 0.01: 1800 particles on the uniform layout
+    let mut case = base_case();
+    case.refinement = mpsfsi::case::Refinement::None;
     let e = validate(
         &case,
         &Limits {
@@ -443,6 +444,39 @@ fn particle_count_above_the_limit() {
         },
     )
     .expect("at the limit");
+}
+
+/// On a multi-resolution layout the estimate counts the fluid outside the fine boxes at
+/// (2 l0)²: for the shipped wedge at its 5 mm it bounds the layout's count from above
+/// within 10 %, and a limit between it and the uniform count accepts the case with
+/// `"auto"` and rejects it with `"none"`.
+#[test]
+fn the_particle_estimate_counts_the_multi_resolution_layout() {
+    let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("cases/wedge_30deg_constant_velocity.json");
+    let case = mpsfsi::case::load_case_file(&path, &[]).unwrap();
+    let params = mpsfsi::engine::params::MpsParameters::new(&case);
+    let built = mpsfsi::engine::scene::build_scene(&case, &params)
+        .particles
+        .len() as f64;
+    let estimate = mpsfsi::case::estimated_particles(&case).unwrap();
+    assert!(
+        (built..=1.1 * built).contains(&estimate),
+        "estimate {estimate:.0} for {built} particles"
+    );
+    let mut uniform = case.clone();
+    uniform.refinement = mpsfsi::case::Refinement::None;
+    let uniform_estimate = mpsfsi::case::estimated_particles(&uniform).unwrap();
+    assert!(
+        uniform_estimate > 2.0 * estimate,
+        "{uniform_estimate} vs {estimate}"
+    );
+    let limits = Limits {
+        max_particles: (1.5 * estimate) as usize,
+    };
+    validate(&case, &limits).expect("the two-level layout fits");
+    let e = validate(&uniform, &limits).expect_err("the uniform layout does not");
+    assert_error(&e, "particle_spacing", "exceed the limit");
 }
 
 #[test]

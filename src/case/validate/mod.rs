@@ -7,8 +7,7 @@
 //! 2. signs and ranges of scalars: density, spacing, end time, cfl, max_dt, kernel
 //!    radii, solver tolerance positive; viscosity non-negative; output intervals
 //!    positive: [`scalars`];
-//! 3. the domain (min < max) and the particle limit (estimated from the fluid block
-//!    areas / l0², before anything is generated): [`scalars`];
+//! 3. the domain (min < max): [`scalars`];
 //! 4. geometry: fluid block and body polygons (>= 3 vertices, no repeated consecutive
 //!    vertex, non-zero area, no crossing edges, bodies counter-clockwise), wall
 //!    polylines (>= 2 points, no zero-length segment), fluid blocks and probes inside
@@ -16,7 +15,9 @@
 //! 5. body motion: free bodies with positive mass and inertia, velocity tables
 //!    strictly increasing in time (checked with each body's polygon): [`geometry`];
 //! 6. refinement: explicit fine boxes non-empty, with a scheme that runs on a
-//!    multi-resolution layout: [`scalars`];
+//!    multi-resolution layout; then the particle limit, estimated from the fluid
+//!    block areas and the fine boxes before anything is generated
+//!    ([`estimated_particles`]): [`scalars`];
 //! 7. names: walls and bodies share the `body` column of loads.csv, so their names are
 //!    unique together and non-empty; probe names likewise among probes: [`names`].
 
@@ -59,31 +60,93 @@ pub fn validate(case: &Case, limits: &Limits) -> Check {
     scalars::check_scalars(case)?;
     scalars::check_domain(case)?;
     geometry::check_fluid_blocks(case)?;
-    scalars::check_particle_limit(case, limits)?;
     geometry::check_walls(case)?;
     geometry::check_bodies(case)?;
     geometry::check_overlaps(case)?;
     geometry::check_output(case)?;
     scalars::check_damping_zones(case)?;
     scalars::check_refinement(case)?;
+    scalars::check_particle_limit(case, limits)?;
     names::check_names(case)?;
     Ok(())
 }
 
-/// Estimated number of fluid particles: the summed fluid block areas / l0²
-/// (overlaps and the parts inside bodies counted, so it is an upper bound up to
-/// lattice rounding). `None` when the case has no usable spacing.
+/// Estimated number of fluid particles: the summed fluid block areas / l0² (overlaps
+/// and the parts inside bodies counted, so an upper bound up to lattice rounding). On a
+/// multi-resolution layout the area outside the fine boxes counts at (2 l0)², except a
+/// band of 2 l0 along each block's boundary, where cut cells stay fine: 3 % above the
+/// layout of the shipped wedges. `None` when the case has no usable spacing.
 pub fn estimated_particles(case: &Case) -> Option<f64> {
     let l0 = case.particle_spacing;
     if !(l0.is_finite() && l0 > 0.0) {
         return None;
     }
-    let area: f64 = case
+    let boxes = super::layout::fine_boxes(case);
+    let cells: f64 = case
         .fluid_blocks
         .iter()
-        .map(|b| signed_area(&points(&b.polygon)).abs())
+        .map(|b| {
+            let poly = points(&b.polygon);
+            let area = signed_area(&poly).abs();
+            let fine = match &boxes {
+                None => area,
+                Some(boxes) => {
+                    let inside: f64 = boxes
+                        .iter()
+                        .map(|bx| clipped_area(&poly, bx.min, bx.max))
+                        .sum();
+                    (inside + 2.0 * l0 * perimeter(&poly)).min(area)
+                }
+            };
+            fine + 0.25 * (area - fine)
+        })
         .sum();
-    Some(area / (l0 * l0))
+    Some(cells / (l0 * l0))
+}
+
+fn perimeter(poly: &[Vec2]) -> f64 {
+    (0..poly.len())
+        .map(|k| (poly[(k + 1) % poly.len()] - poly[k]).norm())
+        .sum()
+}
+
+/// Area of a polygon inside the box [lo, hi] (Sutherland-Hodgman: the box is convex,
+/// the polygon need not be).
+fn clipped_area(poly: &[Vec2], lo: Vec2, hi: Vec2) -> f64 {
+    let mut out: Vec<Vec2> = poly.to_vec();
+    // each half-plane as (axis, bound, keep below)
+    for (axis, bound, below) in [
+        (0, lo.x, false),
+        (0, hi.x, true),
+        (1, lo.y, false),
+        (1, hi.y, true),
+    ] {
+        let keep = |p: &Vec2| {
+            if below {
+                p[axis] <= bound
+            } else {
+                p[axis] >= bound
+            }
+        };
+        let input = std::mem::take(&mut out);
+        for k in 0..input.len() {
+            let (a, b) = (input[k], input[(k + 1) % input.len()]);
+            match (keep(&a), keep(&b)) {
+                (true, true) => out.push(b),
+                (true, false) => out.push(a + (b - a) * ((bound - a[axis]) / (b[axis] - a[axis]))),
+                (false, true) => {
+                    out.push(a + (b - a) * ((bound - a[axis]) / (b[axis] - a[axis])));
+                    out.push(b);
+                }
+                (false, false) => {}
+            }
+        }
+    }
+    if out.len() < 3 {
+        0.0
+    } else {
+        signed_area(&out).abs()
+    }
 }
 
 fn points(p: &[Point]) -> Vec<Vec2> {

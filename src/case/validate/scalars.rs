@@ -238,7 +238,7 @@ pub(super) fn check_particle_limit(case: &Case, limits: &Limits) -> Check {
         return reject(
             "particle_spacing",
             format!(
-                "about {:.0} particles (estimated from the fluid block areas / particle_spacing²) exceed the limit of {}: \
+                "about {:.0} particles (estimated from the fluid block areas / particle_spacing², and / (2 particle_spacing)² outside the fine boxes of a multi-resolution layout) exceed the limit of {}: \
                  use a larger particle_spacing or smaller fluid blocks",
                 n, limits.max_particles
             ),
@@ -289,7 +289,7 @@ pub(super) fn check_refinement(case: &Case) -> Check {
             );
         }
     }
-    if let Some(why) = crate::engine::refinement::unsupported_by_multi_resolution(&case.scheme) {
+    if let Some(why) = crate::case::layout::unsupported_by_multi_resolution(&case.scheme) {
         return reject(
             "refinement",
             format!("fine boxes need a multi-resolution scheme: {why} (or set \"none\")"),

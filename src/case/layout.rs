@@ -1,0 +1,186 @@
+//! Where a case's fluid keeps `particle_spacing` (the fine boxes of `case.refinement`),
+//! from the case alone: validation estimates the particle count from them and the
+//! engine's layout (`engine::refinement`) coarsens the fluid outside them.
+//!
+//! The fine boxes of `"auto"` cover each moving body's swept path over the run,
+//! widened by [`AUTO_MARGIN`] body sizes on every side.
+
+use super::prescribed::PrescribedVelocity;
+use super::{Body, Case, Motion, Projection, Refinement, Scheme};
+use crate::geometry::centroid;
+use crate::math::{rotate, vec2, Real, Vec2};
+
+/// Margin of an automatic fine box around a body's swept path, in body sizes (the
+/// larger side of the body's bounding box). The load on an entering body is decided
+/// within a few wetted half-widths c of it, and c reaches half the breadth at chine
+/// wetting.
+pub const AUTO_MARGIN: Real = 1.0;
+
+/// Samples of a body's path over the run when sweeping it.
+const PATH_SAMPLES: usize = 64;
+
+/// An axis-aligned box.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct FineBox {
+    pub min: Vec2,
+    pub max: Vec2,
+}
+
+impl FineBox {
+    pub fn touches_cell(&self, lo: Vec2, hi: Vec2) -> bool {
+        lo.x < self.max.x && hi.x > self.min.x && lo.y < self.max.y && hi.y > self.min.y
+    }
+}
+
+/// Why `scheme` cannot run a multi-resolution layout, if it cannot: the operators with a
+/// pair radius and volume factor (`engine::resolution`) are the lattice-normalised
+/// Laplacians (HL, classic), the gradients of `pressure_gradient`, the approximate
+/// projection and both load estimators; the per-row operator variants (CHL,
+/// anisotropic, least squares) and the exact projection are single-resolution.
+pub fn unsupported_by_multi_resolution(scheme: &Scheme) -> Option<&'static str> {
+    use super::{GradientKind as G, LaplacianKind as L};
+    if !matches!(
+        scheme.laplacian,
+        L::HigherOrder | L::Classic | L::SecondOrder
+    ) {
+        return Some("scheme.laplacian must be higher_order, classic or second_order");
+    }
+    if matches!(scheme.gradient, G::Anisotropic | G::LeastSquares) {
+        return Some("scheme.gradient anisotropic and least_squares are single-resolution");
+    }
+    if scheme.projection != Projection::Approximate {
+        return Some("scheme.projection must be approximate");
+    }
+    None
+}
+
+/// The fine boxes of a case, `None` for a uniform layout: `"none"`, or `"auto"` without
+/// a moving body or with a scheme that is single-resolution only
+/// ([`unsupported_by_multi_resolution`]; validation rejects explicit boxes with one).
+pub fn fine_boxes(case: &Case) -> Option<Vec<FineBox>> {
+    if unsupported_by_multi_resolution(&case.scheme).is_some() {
+        return None;
+    }
+    match &case.refinement {
+        Refinement::None => None,
+        Refinement::Regions(r) => Some(
+            r.fine
+                .iter()
+                .map(|b| FineBox {
+                    min: vec2(b.min),
+                    max: vec2(b.max),
+                })
+                .collect(),
+        ),
+        Refinement::Auto => {
+            let boxes: Vec<FineBox> = case
+                .bodies
+                .iter()
+                .filter_map(|b| swept_box(b, case))
+                .collect();
+            (!boxes.is_empty()).then_some(boxes)
+        }
+    }
+}
+
+/// The bounding box of a moving body over [0, time.end], widened by the margin; `None`
+/// for a body that does not move. Free bodies follow their initial velocity and gravity
+/// (ballistic, an overestimate of the path in water); a rotating body is swept as its
+/// bounding circle about the centroid.
+fn swept_box(body: &Body, case: &Case) -> Option<FineBox> {
+    if !moves(body) {
+        return None;
+    }
+    let poly: Vec<Vec2> = body.polygon.iter().map(|p| vec2(*p)).collect();
+    let c = centroid(&poly);
+    let radius = poly.iter().map(|p| (p - c).norm()).fold(0.0, Real::max);
+    let (mut lo, mut hi) = (
+        Vec2::repeat(Real::INFINITY),
+        Vec2::repeat(Real::NEG_INFINITY),
+    );
+    for p in &poly {
+        lo = lo.inf(p);
+        hi = hi.sup(p);
+    }
+    let size = (hi.x - lo.x).max(hi.y - lo.y);
+    let end = case.time.end;
+    let g = vec2(case.fluid.gravity);
+    // displacement of the body frame and whether it turns, at time t
+    let (path, turns): (Box<dyn Fn(Real) -> Vec2>, bool) = match &body.motion {
+        Motion::Prescribed {
+            velocity,
+            angular_velocity,
+            table,
+        } => {
+            let v = PrescribedVelocity::new(*velocity, *angular_velocity, table.as_ref());
+            let turns = *angular_velocity != 0.0
+                || table.iter().flatten().any(|s| s.angular_velocity != 0.0);
+            let h = end / PATH_SAMPLES as Real;
+            (
+                Box::new(move |t: Real| {
+                    // trapezoids over the samples up to t
+                    let steps = (t / h).round() as usize;
+                    (0..steps).fold(Vec2::zeros(), |x, k| {
+                        let (a, b) = (v.at(k as Real * h), v.at((k + 1) as Real * h));
+                        x + (a.velocity + b.velocity) * (0.5 * h)
+                    })
+                }),
+                turns,
+            )
+        }
+        Motion::Free {
+            velocity,
+            angular_velocity,
+            ..
+        } => {
+            let v0 = vec2(*velocity);
+            (
+                Box::new(move |t: Real| v0 * t + g * (0.5 * t * t)),
+                *angular_velocity != 0.0,
+            )
+        }
+    };
+    let position = vec2(body.position);
+    let (mut blo, mut bhi) = (
+        Vec2::repeat(Real::INFINITY),
+        Vec2::repeat(Real::NEG_INFINITY),
+    );
+    for k in 0..=PATH_SAMPLES {
+        let offset = position + path(end * k as Real / PATH_SAMPLES as Real);
+        if turns {
+            let centre = offset + rotate(c, body.angle);
+            blo = blo.inf(&(centre - Vec2::repeat(radius)));
+            bhi = bhi.sup(&(centre + Vec2::repeat(radius)));
+        } else {
+            for p in &poly {
+                let x = offset + rotate(*p, body.angle);
+                blo = blo.inf(&x);
+                bhi = bhi.sup(&x);
+            }
+        }
+    }
+    let margin = Vec2::repeat(AUTO_MARGIN * size);
+    Some(FineBox {
+        min: blo - margin,
+        max: bhi + margin,
+    })
+}
+
+/// Does the body move: a free body, or a prescribed one with a velocity?
+pub fn moves(body: &Body) -> bool {
+    match &body.motion {
+        Motion::Free { .. } => true,
+        Motion::Prescribed {
+            velocity,
+            angular_velocity,
+            table,
+        } => {
+            vec2(*velocity).norm() > 0.0
+                || *angular_velocity != 0.0
+                || table
+                    .iter()
+                    .flatten()
+                    .any(|s| vec2(s.velocity).norm() > 0.0 || s.angular_velocity != 0.0)
+        }
+    }
+}
