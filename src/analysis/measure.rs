@@ -293,3 +293,21 @@ pub fn exponential_decay_rate(peaks: &[(Real, Real)]) -> Option<Real> {
     let (_, slope) = fit_line(&logs?)?;
     Some(-slope)
 }
+
+/// The velocity loss of a free-falling body against a model's: for each sample
+/// (time, downward speed) with time in [from, to], (time, (V0 - V) / (V0 - V_model) - 1).
+pub fn velocity_loss_errors(
+    model: &super::reference::FreeFallModel,
+    samples: &[(Real, Real)],
+    from: Real,
+    to: Real,
+) -> Vec<(Real, Real)> {
+    let samples: Vec<(Real, Real)> = samples.iter().copied().filter(|s| s.0 <= to).collect();
+    let times: Vec<Real> = samples.iter().map(|s| s.0).collect();
+    samples
+        .iter()
+        .zip(model.speeds(&times))
+        .filter(|(s, _)| s.0 >= from)
+        .map(|(&(t, v), vm)| (t, (model.v0 - v) / (model.v0 - vm) - 1.0))
+        .collect()
+}

@@ -12,6 +12,9 @@
 //! - `wedge_30deg` (when `cases/wedge_30deg_constant_velocity.json` exists): relative
 //!   error against 14.04 of C_F = F / (rho V³ (t - t0)), t0 the first load above 1 % of
 //!   the peak, fitted over 20-85 % of the time to the chine after it.
+//! - `wedge_free_fall` (when `cases/wedge_free_fall.json` exists): mean relative error
+//!   of the body's velocity loss over 0.6-0.9 t_chine against the momentum model of
+//!   the similarity solution (the reading of the free-fall tests), and the worst sample.
 //! - `standing_wave` (`cases/standing_wave.json`, paper 002 §5.6): relative error of
 //!   the decay rate of the kinetic-energy peaks (`energy.csv`) against the exact linear
 //!   rate (Lamb §349; Lighthill's 4 nu k² is its small-nu limit and is printed); second
@@ -182,6 +185,22 @@ pub fn bench_cases(quick: bool) -> io::Result<Vec<BenchCase>> {
             // a row every step: the score reports the per-step scatter of the load
             overrides: vec!["output.load_interval=null".into()],
             measure: Measure::Wedge,
+        });
+    }
+    let free_fall = cases_dir().join("wedge_free_fall.json");
+    if free_fall.exists() {
+        cases.push(BenchCase {
+            name: "wedge_free_fall",
+            base: read_case_value(&free_fall)?,
+            spacings: if quick {
+                vec![0.04, 0.03, 0.02]
+            } else {
+                // 2 m and 1 m / l0 whole numbers of columns and rows
+                vec![0.02, 0.01, 0.008, 0.005]
+            },
+            // the velocity-loss window ends at 0.9 t_chine = 13.4 ms
+            overrides: vec!["time.end=0.0135".into(), "output.load_interval=null".into()],
+            measure: Measure::FreeFall,
         });
     }
     let wave = cases_dir().join("standing_wave.json");

@@ -20,6 +20,8 @@ pub enum Measure {
     Hydrostatic,
     DamBreak,
     Wedge,
+    /// The free-falling 30° wedge's velocity loss.
+    FreeFall,
     StandingWave,
 }
 
@@ -80,6 +82,7 @@ pub fn score(
         Measure::Hydrostatic => score_hydrostatic(case, dir, summary),
         Measure::DamBreak => score_dam_break(case, dir),
         Measure::Wedge => score_wedge(case, dir),
+        Measure::FreeFall => score_free_fall(case, dir),
         Measure::StandingWave => score_standing_wave(case, dir, summary),
     }
 }
@@ -178,36 +181,13 @@ fn score_wedge(case: &Case, dir: &Path) -> io::Result<Score> {
             "the wedge benchmark needs a prescribed motion",
         ));
     };
-    let speed = vec_norm(*velocity);
-    let d = [velocity[0] / speed, velocity[1] / speed];
-    let beta = leading_deadrise(&body.polygon, body.angle, *velocity)
-        .ok_or_else(|| io::Error::other("no deadrise"))?;
-    // breadth across the motion, keel and free surface along it
-    let (s, c) = body.angle.sin_cos();
-    let world: Vec<[Real; 2]> = body
-        .polygon
-        .iter()
-        .map(|p| {
-            [
-                body.position[0] + c * p[0] - s * p[1],
-                body.position[1] + s * p[0] + c * p[1],
-            ]
-        })
-        .collect();
-    let across: Vec<Real> = world.iter().map(|p| p[0] * d[1] - p[1] * d[0]).collect();
-    let breadth = across.iter().cloned().fold(Real::NEG_INFINITY, Real::max)
-        - across.iter().cloned().fold(Real::INFINITY, Real::min);
-    let keel = world
-        .iter()
-        .map(|p| p[0] * d[0] + p[1] * d[1])
-        .fold(Real::NEG_INFINITY, Real::max);
-    let surface = case
-        .fluid_blocks
-        .iter()
-        .flat_map(|b| b.polygon.iter().map(|p| -(p[0] * d[0] + p[1] * d[1])))
-        .fold(Real::NEG_INFINITY, Real::max);
-    let contact = ((-surface) - keel) / speed;
-    let t_chine = breadth * beta.tan() / (std::f64::consts::PI * speed);
+    let Entry {
+        speed,
+        direction: d,
+        beta,
+        contact,
+        t_chine,
+    } = entry(case, body, *velocity)?;
     let window = (contact + 0.25 * t_chine, contact + 0.85 * t_chine);
     let rows = parse_loads_csv(&std::fs::read_to_string(dir.join("loads.csv"))?)?;
     let (times, picked) = load_series(&rows, &body.name);
@@ -249,6 +229,170 @@ fn score_wedge(case: &Case, dir: &Path) -> io::Result<Score> {
         "C_F vs similarity solution 14.04",
         note,
     ))
+}
+
+/// A wedge's entry: speed, direction of motion, deadrise, the time its keel meets the
+/// free surface and Wagner's chine-wetting time B tan β / (π V).
+struct Entry {
+    speed: Real,
+    direction: [Real; 2],
+    beta: Real,
+    contact: Real,
+    t_chine: Real,
+}
+
+fn entry(case: &Case, body: &crate::case::Body, velocity: [Real; 2]) -> io::Result<Entry> {
+    let speed = vec_norm(velocity);
+    let d = [velocity[0] / speed, velocity[1] / speed];
+    let beta = leading_deadrise(&body.polygon, body.angle, velocity)
+        .ok_or_else(|| io::Error::other("no deadrise"))?;
+    // breadth across the motion, keel and free surface along it
+    let (s, c) = body.angle.sin_cos();
+    let world: Vec<[Real; 2]> = body
+        .polygon
+        .iter()
+        .map(|p| {
+            [
+                body.position[0] + c * p[0] - s * p[1],
+                body.position[1] + s * p[0] + c * p[1],
+            ]
+        })
+        .collect();
+    let across: Vec<Real> = world.iter().map(|p| p[0] * d[1] - p[1] * d[0]).collect();
+    let breadth = across.iter().cloned().fold(Real::NEG_INFINITY, Real::max)
+        - across.iter().cloned().fold(Real::INFINITY, Real::min);
+    let keel = world
+        .iter()
+        .map(|p| p[0] * d[0] + p[1] * d[1])
+        .fold(Real::NEG_INFINITY, Real::max);
+    let surface = case
+        .fluid_blocks
+        .iter()
+        .flat_map(|b| b.polygon.iter().map(|p| -(p[0] * d[0] + p[1] * d[1])))
+        .fold(Real::NEG_INFINITY, Real::max);
+    Ok(Entry {
+        speed,
+        direction: d,
+        beta,
+        contact: ((-surface) - keel) / speed,
+        t_chine: breadth * beta.tan() / (std::f64::consts::PI * speed),
+    })
+}
+
+/// The window of the free fall's velocity loss, in t_chine after contact.
+pub const FREE_FALL_WINDOW: (Real, Real) = (0.6, 0.9);
+
+/// The free-falling 30° wedge: the mean relative error of its velocity loss over
+/// 0.6-0.9 t_chine against the momentum model ([`reference::FreeFallModel`], the
+/// reading of tests/bodies/impact.rs), and the worst sample.
+fn score_free_fall(case: &Case, dir: &Path) -> io::Result<Score> {
+    let body = case
+        .bodies
+        .first()
+        .ok_or_else(|| io::Error::other("free-fall case without a body"))?;
+    let crate::case::Motion::Free { velocity, mass, .. } = &body.motion else {
+        return Err(io::Error::other(
+            "the free-fall benchmark needs a free body",
+        ));
+    };
+    let Entry {
+        speed,
+        direction: d,
+        beta,
+        contact,
+        t_chine,
+    } = entry(case, body, *velocity)?;
+    if (beta.to_degrees() - 30.0).abs() > 0.5 {
+        return Err(io::Error::other(format!(
+            "the free-fall reference is the 30° wedge's (deadrise {:.1}°)",
+            beta.to_degrees()
+        )));
+    }
+    let g = case.fluid.gravity[0] * d[0] + case.fluid.gravity[1] * d[1];
+    let model = reference::FreeFallModel {
+        // the body falls freely until its keel meets the surface
+        v0: speed + g * contact.max(0.0),
+        g,
+        mass: *mass,
+        force_coefficient: reference::WEDGE_30_FORCE_COEFFICIENT,
+        density: case.fluid.density,
+    };
+    let samples = body_speeds(
+        &std::fs::read_to_string(dir.join("bodies.csv"))?,
+        &body.name,
+        d,
+        contact,
+    )?;
+    let (from, to) = (FREE_FALL_WINDOW.0 * t_chine, FREE_FALL_WINDOW.1 * t_chine);
+    let errors = measure::velocity_loss_errors(&model, &samples, from, to);
+    let covered = samples.last().is_some_and(|s| s.0 >= to);
+    if errors.is_empty() || !covered {
+        return Ok(Score::single(
+            Real::NAN,
+            FREE_FALL_MEASURE,
+            format!(
+                "bodies.csv does not cover 0.9 t_chine = {:.2} ms after contact",
+                to * 1e3
+            ),
+        ));
+    }
+    let mean = errors.iter().map(|e| e.1).sum::<Real>() / errors.len() as Real;
+    let worst = errors
+        .iter()
+        .map(|e| e.1)
+        .fold(0.0, |w: Real, e| if e.abs() > w.abs() { e } else { w });
+    Ok(Score {
+        error: mean,
+        error_measure: FREE_FALL_MEASURE.into(),
+        error2: worst,
+        error2_measure: "worst velocity-loss sample".into(),
+        note: format!(
+            "{} samples over 0.6-0.9 t_chine = {:.2} ms",
+            errors.len(),
+            t_chine * 1e3
+        ),
+    })
+}
+
+const FREE_FALL_MEASURE: &str = "mean velocity loss vs momentum model";
+
+/// (time after contact, speed along `d`) of `body` from bodies.csv.
+fn body_speeds(
+    text: &str,
+    body: &str,
+    d: [Real; 2],
+    contact: Real,
+) -> io::Result<Vec<(Real, Real)>> {
+    let mut lines = text.lines();
+    let header: Vec<&str> = lines.next().unwrap_or_default().split(',').collect();
+    let column = |name: &str| {
+        header
+            .iter()
+            .position(|h| *h == name)
+            .ok_or_else(|| io::Error::other(format!("bodies.csv has no column {name}")))
+    };
+    let (t, b, vx, vy) = (
+        column("time")?,
+        column("body")?,
+        column("vx")?,
+        column("vy")?,
+    );
+    let number = |f: &[&str], k: usize| {
+        f[k].parse::<Real>()
+            .map_err(|e| io::Error::other(format!("bodies.csv: {e}")))
+    };
+    let mut out = Vec::new();
+    for line in lines {
+        let f: Vec<&str> = line.split(',').collect();
+        if f.len() < header.len() || f[b] != body {
+            continue;
+        }
+        out.push((
+            number(&f, t)? - contact,
+            number(&f, vx)? * d[0] + number(&f, vy)? * d[1],
+        ));
+    }
+    Ok(out)
 }
 
 /// The standing wave's scores: the mode is one wavelength across the first fluid

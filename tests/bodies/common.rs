@@ -148,22 +148,16 @@ pub fn csv_rows(path: &std::path::Path, name: &str) -> Vec<Vec<f64>> {
 /// (M + m_a(h)) V = M (V0 + g t), dh/dt = V, integrated here with a step far below the
 /// run's.
 pub fn momentum_model_errors(case: &Case, mass: Real, bodies: &[Vec<f64>]) -> Vec<(Real, Real)> {
-    let g = -case.fluid.gravity[1];
-    let v0 = -case.bodies[0].motion_velocity_y();
-    let (c_f, t_chine) = (14.04, 0.0149);
-    let (dt, mut t, mut h, mut v) = (1e-7, 0.0, 0.0, v0);
-    let mut errors = Vec::new();
-    for b in bodies.iter().filter(|b| b[0] <= 0.9 * t_chine) {
-        while t < b[0] {
-            h += v * dt;
-            t += dt;
-            v = mass * (v0 + g * t) / (mass + 0.5 * c_f * RHO * h * h);
-        }
-        if b[0] >= 0.6 * t_chine {
-            errors.push((b[0], (v0 + b[5]) / (v0 - v) - 1.0));
-        }
-    }
-    errors
+    let model = mpsfsi::analysis::reference::FreeFallModel {
+        v0: -case.bodies[0].motion_velocity_y(),
+        g: -case.fluid.gravity[1],
+        mass,
+        force_coefficient: mpsfsi::analysis::reference::WEDGE_30_FORCE_COEFFICIENT,
+        density: RHO,
+    };
+    let t_chine = 0.0149;
+    let samples: Vec<(Real, Real)> = bodies.iter().map(|b| (b[0], -b[5])).collect();
+    mpsfsi::analysis::measure::velocity_loss_errors(&model, &samples, 0.6 * t_chine, 0.9 * t_chine)
 }
 
 /// The vertical velocity a body's motion starts with.

@@ -370,6 +370,58 @@ fn the_wedge_score_reads_the_similarity_force_from_its_onset_and_measures_a_wron
     assert!((ratio - 23.26 / 14.04).abs() < 1e-9, "{ratio}");
 }
 
+/// The free fall is scored on its velocity loss over 0.6-0.9 t_chine against the
+/// momentum model: a body that follows the model reads 0, one that loses 5 % less speed
+/// reads -5 % (mean and worst sample), and one whose rows stop before 0.9 t_chine is not
+/// scored.
+#[test]
+fn the_free_fall_score_reads_the_velocity_loss_against_the_momentum_model() {
+    use mpsfsi::analysis::reference::{FreeFallModel, WEDGE_30_FORCE_COEFFICIENT};
+    use mpsfsi::bench::score::{score, Measure, RunOutcome};
+    let mut value = serde_json::to_value(wedge_case()).unwrap();
+    value["fluid"]["gravity"] = serde_json::json!([0.0, -9.81]);
+    value["bodies"][0]["position"] = serde_json::json!([0.0, 0.0]);
+    value["bodies"][0]["motion"] = serde_json::json!({
+        "type": "free", "mass": 241.0, "velocity": [0.0, -6.15], "locked": ["x", "rotation"]
+    });
+    let case = mpsfsi::case::parse_case_value(value).unwrap();
+    let model = FreeFallModel {
+        v0: 6.15,
+        g: 9.81,
+        mass: 241.0,
+        force_coefficient: WEDGE_30_FORCE_COEFFICIENT,
+        density: 1000.0,
+    };
+    let times: Vec<f64> = (1..=150).map(|k| k as f64 * 1e-4).collect();
+    let speeds = model.speeds(&times);
+    let outcome = RunOutcome {
+        succeeded: true,
+        simulated_time: 0.015,
+        particles: 1000,
+    };
+    let run = |name: &str, loss_factor: f64, rows: usize| {
+        let dir = crate::scratch_dir(&format!("free-fall-score-{name}"));
+        let mut text = String::from("time,body,x,y,angle,vx,vy,omega\n");
+        for (t, v) in times.iter().zip(&speeds).take(rows) {
+            let vy = -(6.15 - loss_factor * (6.15 - v));
+            text.push_str(&format!("{t:.9e},wedge,0,0,0,0,{vy:.12e},0\n"));
+        }
+        std::fs::write(dir.join("bodies.csv"), text).unwrap();
+        score(&Measure::FreeFall, &case, &dir, &outcome).unwrap()
+    };
+    let exact = run("exact", 1.0, times.len());
+    assert!(
+        exact.error.abs() < 1e-9 && exact.error2.abs() < 1e-9,
+        "{exact:?}"
+    );
+    let low = run("low", 0.95, times.len());
+    assert!((low.error + 0.05).abs() < 1e-9, "{low:?}");
+    assert!((low.error2 + 0.05).abs() < 1e-9, "{low:?}");
+    // 0.9 t_chine is 13.4 ms: rows to 10 ms do not cover the window
+    let short = run("short", 1.0, 100);
+    assert!(short.error.is_nan(), "{short:?}");
+}
+
 #[test]
 fn the_hydrostatic_score_compares_the_tank_load_with_the_water_weight() {
     use mpsfsi::bench::score::{score, Measure, RunOutcome};
