@@ -30,7 +30,7 @@ impl CsrMatrix {
 
     /// y = A x (each row summed in column order: deterministic).
     pub fn mul(&self, x: &[Real], y: &mut [Real]) {
-        if self.n < super::pcg::PARALLEL_MIN / 4 {
+        if self.n < super::pcg::PARALLEL_MIN {
             y.iter_mut()
                 .enumerate()
                 .for_each(|(i, yi)| *yi = self.row_dot(i, x));
