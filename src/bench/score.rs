@@ -282,9 +282,9 @@ fn entry(case: &Case, body: &crate::case::Body, velocity: [Real; 2]) -> io::Resu
 /// The window of the free fall's velocity loss, in t_chine after contact.
 pub const FREE_FALL_WINDOW: (Real, Real) = (0.6, 0.9);
 
-/// The free-falling 30° wedge: the mean relative error of its velocity loss over
-/// 0.6-0.9 t_chine against the momentum model ([`reference::FreeFallModel`], the
-/// reading of tests/bodies/impact.rs), and the worst sample.
+/// The free-falling 30° wedge: the size of the mean relative error of its velocity loss
+/// over 0.6-0.9 t_chine against the momentum model ([`reference::FreeFallModel`], the
+/// reading of tests/bodies/impact.rs), and of the worst sample (signed in the note).
 fn score_free_fall(case: &Case, dir: &Path) -> io::Result<Score> {
     let body = case
         .bodies
@@ -341,13 +341,16 @@ fn score_free_fall(case: &Case, dir: &Path) -> io::Result<Score> {
         .iter()
         .map(|e| e.1)
         .fold(0.0, |w: Real, e| if e.abs() > w.abs() { e } else { w });
+    // the report ranks runs by the size of their error; the note keeps the sign
     Ok(Score {
-        error: mean,
+        error: mean.abs(),
         error_measure: FREE_FALL_MEASURE.into(),
-        error2: worst,
+        error2: worst.abs(),
         error2_measure: "worst velocity-loss sample".into(),
         note: format!(
-            "{} samples over 0.6-0.9 t_chine = {:.2} ms",
+            "velocity loss {:+.1} % on average, worst {:+.1} %, over {} samples of 0.6-0.9 t_chine = {:.2} ms",
+            100.0 * mean,
+            100.0 * worst,
             errors.len(),
             t_chine * 1e3
         ),
