@@ -81,6 +81,46 @@ impl CellGrid {
         )
     }
 
+    /// The cell of a point, clamped to the grid (as the particles were filed).
+    #[inline]
+    pub fn clamped_cell(&self, p: Vec2) -> (usize, usize) {
+        let (cx, cy) = self.cell_coords(p);
+        (
+            (cx.max(0) as usize).min(self.nx - 1),
+            (cy.max(0) as usize).min(self.ny - 1),
+        )
+    }
+
+    /// For every cell, the largest `value(j)` over the particles j in the cells within
+    /// `reach` cells of it (0 where there is none): a separable running maximum.
+    pub fn dilated_max(&self, reach: isize, value: impl Fn(usize) -> Real) -> Vec<Real> {
+        let (nx, ny) = (self.nx, self.ny);
+        let mut own = vec![0.0; nx * ny];
+        for (c, m) in own.iter_mut().enumerate() {
+            for &j in &self.sorted[self.cell_start[c] as usize..self.cell_start[c + 1] as usize] {
+                *m = Real::max(*m, value(j as usize));
+            }
+        }
+        let r = reach.max(0) as usize;
+        let mut rows = vec![0.0; nx * ny];
+        for y in 0..ny {
+            for x in 0..nx {
+                let (a, b) = (x.saturating_sub(r), (x + r).min(nx - 1));
+                rows[y * nx + x] = own[y * nx + a..=y * nx + b]
+                    .iter()
+                    .fold(0.0, |m: Real, v| m.max(*v));
+            }
+        }
+        let mut out = vec![0.0; nx * ny];
+        for y in 0..ny {
+            let (a, b) = (y.saturating_sub(r), (y + r).min(ny - 1));
+            for x in 0..nx {
+                out[y * nx + x] = (a..=b).fold(0.0, |m: Real, yy| m.max(rows[yy * nx + x]));
+            }
+        }
+        out
+    }
+
     /// Call `f(j)` for every particle in the cells within `reach` cells of `p`.
     #[inline]
     pub fn for_each_near(&self, p: Vec2, reach: isize, mut f: impl FnMut(usize)) {
@@ -138,9 +178,17 @@ impl NeighborList {
         let (s_min, s_max) = scales.range();
         let cell = radius * s_min;
         let grid = CellGrid::build(positions, cell);
+        // the largest scale a partner of a particle in each cell can have: a pair is at
+        // most s_max radius apart, so its partner lies within `far` cells. A fine
+        // particle away from the jump then searches one cell out, not two (9 cells
+        // instead of 25), and finds the same neighbours in the same order.
+        let far = (s_max * radius / cell - 1e-9).ceil() as isize;
+        let partner_scale = grid.dilated_max(far, |j| scales.of(j));
         Self::from_rows(positions.len(), grid, radius, |i, grid, idx| {
             let xi = positions[i];
-            let reach = (0.5 * (scales.of(i) + s_max) * radius / cell - 1e-9).ceil() as isize;
+            let (cx, cy) = grid.clamped_cell(xi);
+            let s_near = partner_scale[cy * grid.nx + cx];
+            let reach = (0.5 * (scales.of(i) + s_near) * radius / cell - 1e-9).ceil() as isize;
             grid.for_each_near(xi, reach.max(1), |j| {
                 let rj = radius * scales.pair(i, j).0;
                 if j != i && (positions[j] - xi).norm_squared() < rj * rj {
