@@ -17,7 +17,7 @@ pub enum Preconditioner {
 
 /// Below this many unknowns vector operations run on one thread: rayon's fork/join
 /// costs more than the arithmetic below it (the 30° wedge at 1 cm, 17k unknowns: the
-/// solve took 8 % less time with its vector passes on two threads than on one).
+/// solve took 5 % less time with its vector passes on two threads than on one).
 pub(crate) const PARALLEL_MIN: usize = 8192;
 
 pub(crate) fn dot(a: &[Real], b: &[Real]) -> Real {
