@@ -111,6 +111,22 @@ pub enum RunError {
     Io(#[from] std::io::Error),
 }
 
+/// The step from `time` of at most `dt` that lands on `end` without a sliver: when a
+/// full step would leave less than another full one, the last two steps share the rest
+/// evenly. A sliver of a step is a load spike: the pressure source goes as 1/dt² (the
+/// 30° wedge at 1 cm, its axis l0/4 off the lattice, ended on a step of 2e-8 s that
+/// read 9.6 MN/m, 200 times its neighbours).
+pub fn step_to_end(time: Real, end: Real, dt: Real) -> Real {
+    let rest = end - time;
+    if rest <= dt {
+        rest.max(1e-12)
+    } else if rest < 2.0 * dt {
+        0.5 * rest
+    } else {
+        dt
+    }
+}
+
 /// Estimated number of steps (for `check` and progress): end / dt at the larger of the
 /// initial speeds and the free-fall speed over the domain height.
 pub fn estimate_steps(case: &Case) -> u64 {
@@ -205,11 +221,7 @@ pub fn run_case(
             failure = Some(observer.stop_reason(sim.steps, sim.time));
             break;
         }
-        // do not overshoot the end time by more than a sliver
-        let mut dt = sim.next_dt();
-        if sim.time + dt > end {
-            dt = (end - sim.time).max(1e-12);
-        }
+        let dt = step_to_end(sim.time, end, sim.next_dt());
         match advance(&mut sim, coupling.as_mut(), dt) {
             Ok(info) => {
                 let dt = info.dt;

@@ -112,3 +112,26 @@ fn a_moving_body_is_kept_off_the_lattice_mirror_lines() {
         "still water moved off its lattice"
     );
 }
+
+/// A run lands on its end time without a sliver of a step (whose pressure, going as
+/// 1/dt², reads as a load spike): when a full step would leave less than another, the
+/// last two share the rest; no step is then shorter than half the one before it.
+#[test]
+fn a_run_ends_without_a_sliver_of_a_step() {
+    use mpsfsi::run::step_to_end;
+    assert_eq!(step_to_end(0.0, 1.0, 0.3), 0.3);
+    assert_eq!(step_to_end(0.0, 1.0, 0.6), 0.5);
+    assert_eq!(step_to_end(0.5, 1.0, 0.6), 0.5);
+    assert_eq!(step_to_end(0.9, 1.0, 0.3), 1.0 - 0.9);
+    // a constant step a hair short of dividing the end: the naive clamp ends on 1e-9
+    let (end, dt) = (1.0, 0.1 - 1e-10);
+    let (mut t, mut steps) = (0.0, Vec::new());
+    while t < end * (1.0 - 1e-12) {
+        let h = step_to_end(t, end, dt);
+        steps.push(h);
+        t += h;
+    }
+    assert!((t - end).abs() < 1e-12, "ends at {t}");
+    let shortest = steps.iter().copied().fold(f64::INFINITY, f64::min);
+    assert!(shortest >= 0.5 * dt, "shortest step {shortest} of {dt}");
+}
