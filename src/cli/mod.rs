@@ -107,11 +107,11 @@ pub struct BenchArgs {
     #[arg(long)]
     pub no_study: bool,
     /// Only these reference cases of the study (repeatable): hydrostatic, dam_break,
-    /// wedge_30deg, standing_wave. Default: all.
+    /// wedge_30deg, wedge_free_fall, standing_wave. Default: all.
     #[arg(long = "case", value_name = "NAME")]
     pub cases: Vec<String>,
     /// Only these scheme variants of the study and the CFL sweep (repeatable): classic,
-    /// default, chl, least_squares. Default: all.
+    /// default, uniform, chl, least_squares. Default: all.
     #[arg(long = "variant", value_name = "NAME")]
     pub variants: Vec<String>,
     /// Largest size of `--scaling` (640000 and 1300000 are the large sizes).
