@@ -12,6 +12,7 @@ use crate::output::loads_csv::{parse_loads_csv, LoadRow};
 use crate::output::snapshots::{PVD_NAME, SNAPSHOT_DIR};
 use crate::output::vtk::{parse_pvd, parse_vtu, PARTICLES_PART};
 use crate::run::{RunStatus, Summary};
+use crate::service::series::csv_to_columns;
 use std::io;
 use std::path::Path;
 
@@ -359,43 +360,35 @@ fn score_free_fall(case: &Case, dir: &Path) -> io::Result<Score> {
 
 const FREE_FALL_MEASURE: &str = "mean velocity loss vs momentum model";
 
-/// (time after contact, speed along `d`) of `body` from bodies.csv.
+/// (time after contact, speed along `d`) of `body` from bodies.csv, read by the
+/// service's CSV-to-columns reader.
 fn body_speeds(
     text: &str,
     body: &str,
     d: [Real; 2],
     contact: Real,
 ) -> io::Result<Vec<(Real, Real)>> {
-    let mut lines = text.lines();
-    let header: Vec<&str> = lines.next().unwrap_or_default().split(',').collect();
-    let column = |name: &str| {
-        header
+    let columns = csv_to_columns(text.as_bytes()).map_err(io::Error::other)?;
+    let series = columns
+        .get(body)
+        .ok_or_else(|| io::Error::other(format!("bodies.csv has no rows of {body}")))?;
+    let column = |name: &str| -> io::Result<Vec<Real>> {
+        series[name]
+            .as_array()
+            .ok_or_else(|| io::Error::other(format!("bodies.csv has no column {name}")))?
             .iter()
-            .position(|h| *h == name)
-            .ok_or_else(|| io::Error::other(format!("bodies.csv has no column {name}")))
+            .map(|v| {
+                v.as_f64().ok_or_else(|| {
+                    io::Error::other(format!("bodies.csv: {name} {v} is not a number"))
+                })
+            })
+            .collect()
     };
-    let (t, b, vx, vy) = (
-        column("time")?,
-        column("body")?,
-        column("vx")?,
-        column("vy")?,
-    );
-    let number = |f: &[&str], k: usize| {
-        f[k].parse::<Real>()
-            .map_err(|e| io::Error::other(format!("bodies.csv: {e}")))
-    };
-    let mut out = Vec::new();
-    for line in lines {
-        let f: Vec<&str> = line.split(',').collect();
-        if f.len() < header.len() || f[b] != body {
-            continue;
-        }
-        out.push((
-            number(&f, t)? - contact,
-            number(&f, vx)? * d[0] + number(&f, vy)? * d[1],
-        ));
-    }
-    Ok(out)
+    let (t, vx, vy) = (column("time")?, column("vx")?, column("vy")?);
+    Ok(t.iter()
+        .zip(vx.iter().zip(&vy))
+        .map(|(t, (vx, vy))| (t - contact, vx * d[0] + vy * d[1]))
+        .collect())
 }
 
 /// The standing wave's scores: the mode is one wavelength across the first fluid
