@@ -184,9 +184,9 @@ fn free_fall_wedge_velocity_matches_its_own_loads() {
 }
 
 /// The free-fall wedge at 1 cm loses speed as the momentum balance of the similarity
-/// solution says (`momentum_model_errors`): over 0.6-0.9 t_chine the mean within 10 %,
-/// each sample within 20 % (the force comes in bursts as the wedge meets each lattice
-/// row; B/l0 = 50). The model takes the acceleration part of the force (m_a dV/dt, about
+/// solution says (`momentum_model_errors`): over 0.6-0.9 t_chine the mean within 5 %,
+/// each sample within 10 % (reads -0.9 % and -4.2 %; the force comes in bursts as the
+/// wedge meets each lattice row, B/l0 = 50). The model takes the acceleration part of the force (m_a dV/dt, about
 /// 12 % of it at 0.8 t_chine) from the same added mass, which is Wagner's assumption,
 /// not the similarity solution's. At B/l0 = 100 with 5 % on the mean: tests/bodies
 /// impact.rs.
@@ -210,9 +210,9 @@ fn free_fall_wedge_slows_like_the_momentum_model() {
         1e3 * t_worst
     );
     assert!(errors.len() >= 30, "too few samples: {}", errors.len());
-    assert!(mean.abs() < 0.10, "mean error {mean:+.3}");
+    assert!(mean.abs() < 0.05, "mean error {mean:+.3}");
     assert!(
-        worst.abs() < 0.20,
+        worst.abs() < 0.10,
         "error {worst:+.3} at {:.2} ms",
         1e3 * t_worst
     );
