@@ -174,8 +174,8 @@ pub enum WallKinematics {
     /// rho (g - a_w). A particle that falls behind an advancing face is pushed only by
     /// its fluid neighbours, so the force on a box moving at 1 m/s through still water
     /// scatters by 756 N/m per step, and a flat plate started impulsively on still water
-    /// carries 1.078 / 1.099 / 1.116 of Wagner's added mass at 10 / 5 / 2.5 mm
-    /// (tests/bodies/plate_impulse.rs): a flat impact's impulse comes out 8-12 % high.
+    /// carries 1.073 / 1.095 of Wagner's added mass at 10 / 5 mm, rising with refinement
+    /// (tests/bodies/plate_impulse.rs): a flat impact's impulse comes out 7-13 % high.
     /// The default because it is the one that keeps long runs stable (see `neumann`).
     #[default]
     Source,
