@@ -182,11 +182,20 @@ fn user_wedge_40_degrees_with_defaults() {
     assert!(err.abs() < 0.05, "{:+.1} %", 100.0 * err);
 }
 
-/// 10° deadrise: similarity C_F = 211.7 (below the 15-40° for which the README promises 3 %).
+/// 10° deadrise: similarity C_F = 211.7 (below the 15-40° for which the README promises
+/// 3 %). At B/l0 = 100 the jet root is far thinner than a spacing and one run's reading
+/// moves with the lattice's offset from the axis (+6.4 % on the axis, -2.0 to +10.5 %
+/// over the offsets), so the mean of the four-offset ensemble is what is held to 5 %;
+/// it reads +5.2 ± 2.7 %.
 #[test]
-#[ignore = "80 s on two cores; fails: +6.4 % (t0 0.16 ms, per-step scatter 1.02); the reading moves with the lattice offset: four offsets read +4.9 ± 2.6 % (-2.0 to +10.5 %)"]
+#[ignore = "5 minutes on two cores; fails: +5.2 ± 2.7 % (+7.8, +10.5, +4.5, -2.0 %)"]
 fn user_wedge_10_degrees_with_defaults() {
-    let err = wedge_error(10.0, 211.7);
+    let (c, se) = offset_ensemble(10.0, 0.005, 0.2);
+    let err = c / 211.7 - 1.0;
+    println!(
+        "10°: C_F {c:.2} ± {se:.2} against 211.7 ({:+.1} %)",
+        100.0 * err
+    );
     assert!(err.abs() < 0.05, "{:+.1} %", 100.0 * err);
 }
 
@@ -257,22 +266,22 @@ fn light_free_fall_wedge_at_its_spacing() {
     );
 }
 
-/// C_F of the 30° user wedge at spacing `l0` and Courant number `cfl`, its axis `d` l0
-/// from the lattice's nearest mirror line, for d = 1/8, 1/6, 5/24 and 1/4 (the scene
-/// keeps every body at least 1/8 off): the mean and its standard error.
-fn offset_ensemble(l0: f64, cfl: f64) -> (f64, f64) {
-    let t_chine = chine_time(30.0);
+/// C_F of the user wedge of `deadrise` degrees at spacing `l0` and Courant number `cfl`,
+/// its axis `d` l0 from the lattice's nearest mirror line, for d = 1/8, 1/6, 5/24 and 1/4
+/// (the scene keeps every body at least 1/8 off): the mean and its standard error.
+fn offset_ensemble(deadrise: f64, l0: f64, cfl: f64) -> (f64, f64) {
+    let t_chine = chine_time(deadrise);
     let values: Vec<f64> = [1.0 / 8.0, 1.0 / 6.0, 5.0 / 24.0, 1.0 / 4.0]
         .iter()
         .map(|d| {
-            let mut case = parse_case_str(&user_wedge(30.0, l0, t_chine + 0.002)).unwrap();
-            case.name = format!("ensemble-{l0}-{cfl}-{d:.3}");
+            let mut case = parse_case_str(&user_wedge(deadrise, l0, t_chine + 0.002)).unwrap();
+            case.name = format!("ensemble-{deadrise}-{l0}-{cfl}-{d:.3}");
             case.time.cfl = cfl;
             case.bodies[0].position[0] = d * l0;
             let (loads, _, summary) = run_parsed_case(case, "wedge");
             let (c, t0) = force_coefficient(&loads, t_chine);
             println!(
-                "l0 {l0}, cfl {cfl}, offset {d:.3} l0: C_F {c:.3} (t0 {:.3} ms), {} steps ({} repeated)",
+                "{deadrise}°, l0 {l0}, cfl {cfl}, offset {d:.3} l0: C_F {c:.3} (t0 {:.3} ms), {} steps ({} repeated)",
                 1e3 * t0,
                 summary.steps,
                 summary.steps_repeated
@@ -289,8 +298,8 @@ fn offset_ensemble(l0: f64, cfl: f64) -> (f64, f64) {
 /// Item 1 of the impact defaults: at the default CFL 0.2 an impact reads as at 0.1, the
 /// two four-offset means of the 30° wedge within two standard errors of their difference.
 fn cfl_reads_as_half_the_cfl(l0: f64) {
-    let (a, sa) = offset_ensemble(l0, 0.2);
-    let (b, sb) = offset_ensemble(l0, 0.1);
+    let (a, sa) = offset_ensemble(30.0, l0, 0.2);
+    let (b, sb) = offset_ensemble(30.0, l0, 0.1);
     let se = sa.hypot(sb);
     println!(
         "l0 {l0}: C_F at CFL 0.2 {a:.3} ± {sa:.3}, at 0.1 {b:.3} ± {sb:.3} (similarity 14.04): difference {:.3}, {:.1} standard errors",
