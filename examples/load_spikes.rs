@@ -39,10 +39,8 @@ fn main() {
         let dt = step_to_end(sim.time, end, sim.next_dt());
         let n_before = sim.particles.len();
         let rejected = sim.stats.rejected_steps;
-        let t_start = sim.time;
         let info = advance(&mut sim, coupling.as_mut(), dt).unwrap();
-        let taken = sim.time - t_start;
-        dts.push(taken);
+        dts.push(info.dt);
         let retried = sim.stats.rejected_steps - rejected;
         if sim.particles.len() != n_before {
             // a runaway was removed: the indices moved, start the history again
@@ -70,13 +68,12 @@ fn main() {
                 .iter()
                 .filter(|&&i| !last_s[i] && p.free_surface[i])
                 .count();
-            println!("  solver {} iterations, residual {:.1e}; near the body {} surface -> interior, {} interior -> surface", info.solver_iterations, info.solver_residual, to_interior, to_surface);
             let mut by_p = near.clone();
             by_p.sort_by(|&a, &b| p.pressure[b].partial_cmp(&p.pressure[a]).unwrap());
             println!(
                 "t {:.4} ms dt {:.2e} (tried {:.2e}, {} rejections; before {:.2e} {:.2e}) F_y {:.0} (median before {:.0}), {} particles within 3 l0",
                 1e3 * sim.time,
-                taken,
+                info.dt,
                 dt,
                 retried,
                 dts[dts.len().saturating_sub(2)],
@@ -85,8 +82,9 @@ fn main() {
                 median,
                 near.len()
             );
+            println!("  solver {} iterations, residual {:.1e}; near the body {} surface -> interior, {} interior -> surface", info.solver_iterations, info.solver_residual, to_interior, to_surface);
             for &i in by_p.iter().take(4) {
-                let nb = sim.wall_contacts();
+                let contacts = sim.wall_contacts();
                 let (mut fluid, mut surf) = (0, 0);
                 for j in 0..p.len() {
                     let d = (p.position[j] - p.position[i]).norm();
@@ -104,7 +102,7 @@ fn main() {
                     p.position[i].x,
                     p.position[i].y,
                     dist,
-                    nb.of(i).len(),
+                    contacts.of(i).len(),
                     p.pressure[i],
                     last_p[i],
                     p.velocity[i].norm(),
