@@ -297,7 +297,7 @@ pub fn exponential_decay_rate(peaks: &[(Real, Real)]) -> Option<Real> {
 /// The velocity loss of a free-falling body against a model's: for each sample
 /// (time, downward speed) with time in [from, to], (time, (V0 - V) / (V0 - V_model) - 1).
 pub fn velocity_loss_errors(
-    model: &super::reference::FreeFallModel,
+    model: &impl super::reference::FreeFall,
     samples: &[(Real, Real)],
     from: Real,
     to: Real,
@@ -308,6 +308,9 @@ pub fn velocity_loss_errors(
         .iter()
         .zip(model.speeds(&times))
         .filter(|(s, _)| s.0 >= from)
-        .map(|(&(t, v), vm)| (t, (model.v0 - v) / (model.v0 - vm) - 1.0))
+        .map(|(&(t, v), vm)| {
+            let v0 = model.initial_speed();
+            (t, (v0 - v) / (v0 - vm) - 1.0)
+        })
         .collect()
 }

@@ -1,6 +1,10 @@
 //! Shared helpers: load a shipped case with overrides, run it with the coupling, and
 //! keep the per-step loads and body samples.
 
+use mpsfsi::analysis::reference::{
+    FreeFall, FreeFallModel, LogvinovichFreeFall, LOGVINOVICH_30_FORCE_COEFFICIENT,
+    WEDGE_30_FORCE_COEFFICIENT,
+};
 use mpsfsi::case::{load_case_file, Case};
 use mpsfsi::coupling::{BodySample, Coupling, CouplingOptions};
 use mpsfsi::engine::{SimError, Simulation};
@@ -148,16 +152,35 @@ pub fn csv_rows(path: &std::path::Path, name: &str) -> Vec<Vec<f64>> {
 /// (M + m_a(h)) V = M (V0 + g t), dh/dt = V, integrated here with a step far below the
 /// run's.
 pub fn momentum_model_errors(case: &Case, mass: Real, bodies: &[Vec<f64>]) -> Vec<(Real, Real)> {
-    let model = mpsfsi::analysis::reference::FreeFallModel {
+    let model = FreeFallModel {
         v0: -case.bodies[0].motion_velocity_y(),
         g: -case.fluid.gravity[1],
         mass,
-        force_coefficient: mpsfsi::analysis::reference::WEDGE_30_FORCE_COEFFICIENT,
+        force_coefficient: WEDGE_30_FORCE_COEFFICIENT,
         density: RHO,
     };
+    velocity_loss_against(&model, bodies)
+}
+
+/// The same against the modified Logvinovich model (references.md's closure of a free
+/// fall) with its force scaled onto the similarity solution's at constant speed: the two
+/// models part in the added mass of the deceleration (`LogvinovichFreeFall`).
+pub fn logvinovich_errors(case: &Case, mass: Real, bodies: &[Vec<f64>]) -> Vec<(Real, Real)> {
+    let model = LogvinovichFreeFall {
+        v0: -case.bodies[0].motion_velocity_y(),
+        g: -case.fluid.gravity[1],
+        mass,
+        density: RHO,
+        beta: 30f64.to_radians(),
+        force_scale: WEDGE_30_FORCE_COEFFICIENT / LOGVINOVICH_30_FORCE_COEFFICIENT,
+    };
+    velocity_loss_against(&model, bodies)
+}
+
+fn velocity_loss_against(model: &impl FreeFall, bodies: &[Vec<f64>]) -> Vec<(Real, Real)> {
     let t_chine = 0.0149;
     let samples: Vec<(Real, Real)> = bodies.iter().map(|b| (b[0], -b[5])).collect();
-    mpsfsi::analysis::measure::velocity_loss_errors(&model, &samples, 0.6 * t_chine, 0.9 * t_chine)
+    mpsfsi::analysis::measure::velocity_loss_errors(model, &samples, 0.6 * t_chine, 0.9 * t_chine)
 }
 
 /// The vertical velocity a body's motion starts with.

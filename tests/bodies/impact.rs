@@ -10,7 +10,7 @@
 //! |F_y| exceeds 1 % of the run's peak. Each run also checks the load for single-step
 //! spikes (`assert_no_spikes`) and prints the per-step scatter.
 
-use crate::common::{case_path, csv_rows, momentum_model_errors, RHO};
+use crate::common::{case_path, csv_rows, logvinovich_errors, momentum_model_errors, RHO};
 use mpsfsi::analysis::measure::{self, force_coefficient_from_onset};
 use mpsfsi::case::{parse_case_str, Case, Limits, ValidCase};
 use mpsfsi::run::{run_case, Quiet, Summary};
@@ -222,6 +222,11 @@ fn free_fall_error(mass: f64) -> (f64, f64) {
     let (loads, bodies, summary) = run_user_case_with_bodies(&text, "wedge");
     let parsed = parse_case_str(&text).unwrap();
     let errors = momentum_model_errors(&parsed, mass, &bodies);
+    let other = logvinovich_errors(&parsed, mass, &bodies);
+    println!(
+        "free fall {mass} kg/m: velocity loss against the modified Logvinovich model scaled to the similarity force {:+.2} % on average",
+        100.0 * other.iter().map(|e| e.1).sum::<f64>() / other.len() as f64
+    );
     let mean = errors.iter().map(|e| e.1).sum::<f64>() / errors.len() as f64;
     let worst = errors
         .iter()
@@ -243,7 +248,8 @@ fn free_fall_error(mass: f64) -> (f64, f64) {
 
 /// The shipped free-fall wedge, 241 kg/m: reads -2.7 % on average, worst -5.8 %, 45 s on
 /// two cores. With its axis 1/6, 5/24 and 1/4 l0 off the lattice's mirror line it reads
-/// -4.0, -4.0 and -5.4 %.
+/// -4.0, -4.0 and -5.4 %. Against the modified Logvinovich model scaled to the
+/// similarity force it reads -0.7 %.
 #[test]
 fn shipped_free_fall_wedge_at_its_spacing() {
     let (mean, worst) = free_fall_error(241.0);
@@ -255,9 +261,12 @@ fn shipped_free_fall_wedge_at_its_spacing() {
 
 /// A quarter of its mass (60.25 kg/m): the similarity solution's added mass C_F rho h²/2
 /// reaches the body's own at the chine (h = 0.092 m), Wagner's rho pi c²/2 (98 kg/m
-/// there) 1.6 times it.
+/// there) 1.6 times it. The deceleration's added mass is where the reference models
+/// part: the modified Logvinovich model scaled to the similarity force puts this body's
+/// velocity loss 4.2 % below the momentum model's (the shipped mass 2.1 %), and the run
+/// reads -1.6 % against it.
 #[test]
-#[ignore = "100 s on two cores; fails: mean -5.7 %, worst -7.3 % (four lattice offsets: -5.2 ± 0.1 %)"]
+#[ignore = "100 s on two cores; fails against the momentum model: mean -5.7 %, worst -7.3 % (four lattice offsets: -5.2 ± 0.1 %)"]
 fn light_free_fall_wedge_at_its_spacing() {
     let (mean, worst) = free_fall_error(60.25);
     assert!(

@@ -376,7 +376,7 @@ fn the_wedge_score_reads_the_similarity_force_from_its_onset_and_measures_a_wron
 /// 0.9 t_chine is not scored.
 #[test]
 fn the_free_fall_score_reads_the_velocity_loss_against_the_momentum_model() {
-    use mpsfsi::analysis::reference::{FreeFallModel, WEDGE_30_FORCE_COEFFICIENT};
+    use mpsfsi::analysis::reference::{FreeFall, FreeFallModel, WEDGE_30_FORCE_COEFFICIENT};
     use mpsfsi::bench::score::{score, Measure, RunOutcome};
     let mut value = serde_json::to_value(wedge_case()).unwrap();
     value["fluid"]["gravity"] = serde_json::json!([0.0, -9.81]);
@@ -638,4 +638,52 @@ fn results_csv_names_the_particle_steps_of_each_run() {
     assert_eq!(column("particle_steps"), "299500");
     assert_eq!(column("steps"), "300");
     assert_eq!(column("wall_time_s"), "2.5000");
+}
+
+/// The modified Logvinovich model as references.md states it: at constant speed its
+/// force coefficient is 15.09 on the 30° wedge, and its dV/dt term is the closed form
+/// rho h² (pi k²/2 + k² tan beta - 2k), k = pi / (2 tan beta) (the integral of
+/// sqrt(c² - x²) + |x| tan beta - h over the wetted width).
+#[test]
+fn the_logvinovich_model_reads_its_published_force_and_added_mass() {
+    use mpsfsi::analysis::reference::{LogvinovichFreeFall, LOGVINOVICH_30_FORCE_COEFFICIENT};
+    let beta = 30f64.to_radians();
+    let model = LogvinovichFreeFall {
+        v0: 6.15,
+        g: 9.81,
+        mass: 241.0,
+        density: 1000.0,
+        beta,
+        force_scale: 1.0,
+    };
+    let (h, v) = (0.02, 6.15);
+    let c_f = model.force(h, v, 0.0) / (1000.0 * v * v * h);
+    assert!(
+        (c_f / LOGVINOVICH_30_FORCE_COEFFICIENT - 1.0).abs() < 1e-3,
+        "C_F {c_f}"
+    );
+    let k = std::f64::consts::PI / (2.0 * beta.tan());
+    let added =
+        1000.0 * h * h * (0.5 * std::f64::consts::PI * k * k + k * k * beta.tan() - 2.0 * k);
+    let got = model.force(h, 0.0, 1.0);
+    assert!((got / added - 1.0).abs() < 1e-4, "{got} against {added}");
+}
+
+/// A body far heavier than its added mass falls as in vacuum, V = V0 + g t, whatever the
+/// model's force.
+#[test]
+fn a_very_heavy_body_falls_freely_in_the_logvinovich_model() {
+    use mpsfsi::analysis::reference::{FreeFall, LogvinovichFreeFall};
+    let model = LogvinovichFreeFall {
+        v0: 6.15,
+        g: 9.81,
+        mass: 1e12,
+        density: 1000.0,
+        beta: 30f64.to_radians(),
+        force_scale: 1.0,
+    };
+    let times = [0.005, 0.01, 0.015];
+    for (t, v) in times.iter().zip(model.speeds(&times)) {
+        assert!((v - (6.15 + 9.81 * t)).abs() < 1e-4, "t {t}: {v}");
+    }
 }
