@@ -304,13 +304,11 @@ pub fn velocity_loss_errors(
 ) -> Vec<(Real, Real)> {
     let samples: Vec<(Real, Real)> = samples.iter().copied().filter(|s| s.0 <= to).collect();
     let times: Vec<Real> = samples.iter().map(|s| s.0).collect();
+    let v0 = model.initial_speed();
     samples
         .iter()
         .zip(model.speeds(&times))
         .filter(|(s, _)| s.0 >= from)
-        .map(|(&(t, v), vm)| {
-            let v0 = model.initial_speed();
-            (t, (v0 - v) / (v0 - vm) - 1.0)
-        })
+        .map(|(&(t, v), vm)| (t, (v0 - v) / (v0 - vm) - 1.0))
         .collect()
 }
