@@ -188,7 +188,7 @@ pub struct LogvinovichFreeFall {
 impl LogvinovichFreeFall {
     /// Quadrature points over the wetted width, x = c sin(theta): the pressure's
     /// 1/s singularity at the edges becomes a bounded integrand.
-    const POINTS: usize = 2000;
+    const POINTS: usize = 500;
 
     /// Downward force per metre at penetration `h`, downward speed `v` and acceleration
     /// `dv` (the model's force, times `force_scale`).

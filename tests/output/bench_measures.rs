@@ -421,6 +421,31 @@ fn the_free_fall_score_reads_the_velocity_loss_against_the_momentum_model() {
     // 0.9 t_chine is 13.4 ms: rows to 10 ms do not cover the window
     let short = run("short", 1.0, 100);
     assert!(short.error.is_nan(), "{short:?}");
+    // the note also reads the velocity loss against the modified Logvinovich model scaled
+    // to the similarity force: a body that follows that model reads 0 there (with the
+    // deadrise of the case's polygon, 29.996°)
+    let logvinovich = mpsfsi::analysis::reference::LogvinovichFreeFall {
+        v0: 6.15,
+        g: 9.81,
+        mass: 241.0,
+        density: 1000.0,
+        beta: (0.1443f64 / 0.25).atan(),
+        force_scale: WEDGE_30_FORCE_COEFFICIENT
+            / mpsfsi::analysis::reference::LOGVINOVICH_30_FORCE_COEFFICIENT,
+    };
+    let dir = crate::scratch_dir("free-fall-score-logvinovich");
+    let mut text = String::from("time,body,x,y,angle,vx,vy,omega\n");
+    for (t, v) in times.iter().zip(logvinovich.speeds(&times)) {
+        text.push_str(&format!("{t:.9e},wedge,0,0,0,0,{:.12e},0\n", -v));
+    }
+    std::fs::write(dir.join("bodies.csv"), text).unwrap();
+    let other = score(&Measure::FreeFall, &case, &dir, &outcome).unwrap();
+    let zero = ["+0.0 %", "-0.0 %"].map(|z| format!("similarity force {z}"));
+    assert!(
+        zero.iter().any(|z| other.note.contains(z)),
+        "{}",
+        other.note
+    );
 }
 
 #[test]
