@@ -294,6 +294,11 @@ pub fn exponential_decay_rate(peaks: &[(Real, Real)]) -> Option<Real> {
     Some(-slope)
 }
 
+/// The mean of the relative errors of [`velocity_loss_errors`].
+pub fn mean_error(errors: &[(Real, Real)]) -> Real {
+    errors.iter().map(|e| e.1).sum::<Real>() / errors.len() as Real
+}
+
 /// The velocity loss of a free-falling body against a model's: for each sample
 /// (time, downward speed) with time in [from, to], (time, (V0 - V) / (V0 - V_model) - 1).
 pub fn velocity_loss_errors(

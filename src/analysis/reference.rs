@@ -166,8 +166,8 @@ impl FreeFall for FreeFallModel {
 /// and closed with M dV/dt = M g - F (downward positive), from contact at t = 0.
 ///
 /// Its force at constant speed is C_F = 15.09, 7 % above the similarity solution;
-/// `force_scale` 14.04 / 15.09 puts it on the similarity solution and keeps the model's
-/// split between the V² and the dV/dt terms. That split is where it parts from
+/// [`LogvinovichFreeFall::matching`] scales it onto the similarity solution and keeps the
+/// model's split between the V² and the dV/dt terms. That split is where it parts from
 /// [`FreeFallModel`]: the dV/dt term carries rho h² (pi k²/2 + k² tan beta - 2k),
 /// k = pi / (2 tan beta) (10.46 rho h² at 30°), where the momentum model carries
 /// C_F rho h²/2 (7.02), so a light body, whose deceleration matters most, loses less speed.
@@ -189,6 +189,26 @@ impl LogvinovichFreeFall {
     /// Quadrature points over the wetted width, x = c sin(theta): the pressure's
     /// 1/s singularity at the edges becomes a bounded integrand.
     const POINTS: usize = 500;
+
+    /// The model of the same fall as `momentum`, on a wedge of deadrise `beta`, with its
+    /// force scaled so that at constant speed it carries the momentum model's C_F: the
+    /// two then differ only in how they split the force between V² and dV/dt.
+    pub fn matching(momentum: &FreeFallModel, beta: Real) -> Self {
+        let unscaled = Self {
+            v0: momentum.v0,
+            g: momentum.g,
+            mass: momentum.mass,
+            density: momentum.density,
+            beta,
+            force_scale: 1.0,
+        };
+        // C_F at constant speed does not depend on h or V (self-similar)
+        let own = unscaled.force(1.0, 1.0, 0.0) / momentum.density;
+        Self {
+            force_scale: momentum.force_coefficient / own,
+            ..unscaled
+        }
+    }
 
     /// Downward force per metre at penetration `h`, downward speed `v` and acceleration
     /// `dv` (the model's force, times `force_scale`).

@@ -337,7 +337,7 @@ fn score_free_fall(case: &Case, dir: &Path) -> io::Result<Score> {
             ),
         ));
     }
-    let mean = errors.iter().map(|e| e.1).sum::<Real>() / errors.len() as Real;
+    let mean = measure::mean_error(&errors);
     let worst = errors
         .iter()
         .map(|e| e.1)
@@ -345,17 +345,13 @@ fn score_free_fall(case: &Case, dir: &Path) -> io::Result<Score> {
     // references.md's own closure of a free fall, on the same constant-speed force: the
     // two models part in the deceleration's added mass (by 4 % for a body a quarter of
     // the shipped mass), so the note gives both
-    let logvinovich = reference::LogvinovichFreeFall {
-        v0: model.v0,
-        g,
-        mass: *mass,
-        density: case.fluid.density,
-        beta,
-        force_scale: reference::WEDGE_30_FORCE_COEFFICIENT
-            / reference::LOGVINOVICH_30_FORCE_COEFFICIENT,
-    };
-    let other = measure::velocity_loss_errors(&logvinovich, &samples, from, to);
-    let other_mean = other.iter().map(|e| e.1).sum::<Real>() / other.len() as Real;
+    let logvinovich = reference::LogvinovichFreeFall::matching(&model, beta);
+    let other_mean = measure::mean_error(&measure::velocity_loss_errors(
+        &logvinovich,
+        &samples,
+        from,
+        to,
+    ));
     // the report ranks runs by the size of their error; the note keeps the sign
     Ok(Score {
         error: mean.abs(),

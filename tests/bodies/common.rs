@@ -2,8 +2,7 @@
 //! keep the per-step loads and body samples.
 
 use mpsfsi::analysis::reference::{
-    FreeFall, FreeFallModel, LogvinovichFreeFall, LOGVINOVICH_30_FORCE_COEFFICIENT,
-    WEDGE_30_FORCE_COEFFICIENT,
+    FreeFall, FreeFallModel, LogvinovichFreeFall, WEDGE_30_FORCE_COEFFICIENT,
 };
 use mpsfsi::case::{load_case_file, Case};
 use mpsfsi::coupling::{BodySample, Coupling, CouplingOptions};
@@ -152,29 +151,25 @@ pub fn csv_rows(path: &std::path::Path, name: &str) -> Vec<Vec<f64>> {
 /// (M + m_a(h)) V = M (V0 + g t), dh/dt = V, integrated here with a step far below the
 /// run's.
 pub fn momentum_model_errors(case: &Case, mass: Real, bodies: &[Vec<f64>]) -> Vec<(Real, Real)> {
-    let model = FreeFallModel {
-        v0: -case.bodies[0].motion_velocity_y(),
-        g: -case.fluid.gravity[1],
-        mass,
-        force_coefficient: WEDGE_30_FORCE_COEFFICIENT,
-        density: RHO,
-    };
-    velocity_loss_against(&model, bodies)
+    velocity_loss_against(&momentum_model(case, mass), bodies)
 }
 
 /// The same against the modified Logvinovich model (references.md's closure of a free
 /// fall) with its force scaled onto the similarity solution's at constant speed: the two
 /// models part in the added mass of the deceleration (`LogvinovichFreeFall`).
 pub fn logvinovich_errors(case: &Case, mass: Real, bodies: &[Vec<f64>]) -> Vec<(Real, Real)> {
-    let model = LogvinovichFreeFall {
+    let model = LogvinovichFreeFall::matching(&momentum_model(case, mass), 30f64.to_radians());
+    velocity_loss_against(&model, bodies)
+}
+
+fn momentum_model(case: &Case, mass: Real) -> FreeFallModel {
+    FreeFallModel {
         v0: -case.bodies[0].motion_velocity_y(),
         g: -case.fluid.gravity[1],
         mass,
+        force_coefficient: WEDGE_30_FORCE_COEFFICIENT,
         density: RHO,
-        beta: 30f64.to_radians(),
-        force_scale: WEDGE_30_FORCE_COEFFICIENT / LOGVINOVICH_30_FORCE_COEFFICIENT,
-    };
-    velocity_loss_against(&model, bodies)
+    }
 }
 
 fn velocity_loss_against(model: &impl FreeFall, bodies: &[Vec<f64>]) -> Vec<(Real, Real)> {

@@ -196,7 +196,7 @@ fn free_fall_wedge_slows_like_the_momentum_model() {
         case, mass, bodies, ..
     } = free_fall_run();
     let errors = momentum_model_errors(case, *mass, bodies);
-    let mean = errors.iter().map(|e| e.1).sum::<f64>() / errors.len() as f64;
+    let mean = mpsfsi::analysis::measure::mean_error(&errors);
     let (t_worst, worst) = errors
         .iter()
         .copied()

@@ -225,9 +225,9 @@ fn free_fall_error(mass: f64) -> (f64, f64) {
     let other = logvinovich_errors(&parsed, mass, &bodies);
     println!(
         "free fall {mass} kg/m: velocity loss against the modified Logvinovich model scaled to the similarity force {:+.2} % on average",
-        100.0 * other.iter().map(|e| e.1).sum::<f64>() / other.len() as f64
+        100.0 * measure::mean_error(&other)
     );
-    let mean = errors.iter().map(|e| e.1).sum::<f64>() / errors.len() as f64;
+    let mean = measure::mean_error(&errors);
     let worst = errors
         .iter()
         .map(|e| e.1)

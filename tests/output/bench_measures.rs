@@ -424,15 +424,10 @@ fn the_free_fall_score_reads_the_velocity_loss_against_the_momentum_model() {
     // the note also reads the velocity loss against the modified Logvinovich model scaled
     // to the similarity force: a body that follows that model reads 0 there (with the
     // deadrise of the case's polygon, 29.996°)
-    let logvinovich = mpsfsi::analysis::reference::LogvinovichFreeFall {
-        v0: 6.15,
-        g: 9.81,
-        mass: 241.0,
-        density: 1000.0,
-        beta: (0.1443f64 / 0.25).atan(),
-        force_scale: WEDGE_30_FORCE_COEFFICIENT
-            / mpsfsi::analysis::reference::LOGVINOVICH_30_FORCE_COEFFICIENT,
-    };
+    let logvinovich = mpsfsi::analysis::reference::LogvinovichFreeFall::matching(
+        &model,
+        (0.1443f64 / 0.25).atan(),
+    );
     let dir = crate::scratch_dir("free-fall-score-logvinovich");
     let mut text = String::from("time,body,x,y,angle,vx,vy,omega\n");
     for (t, v) in times.iter().zip(logvinovich.speeds(&times)) {
