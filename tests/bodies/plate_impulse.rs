@@ -97,7 +97,7 @@ fn plate_start(l0: f64, kinematics: &str, c: f64, extra: &[String]) -> Start {
 }
 
 /// `wall_kinematics = "neumann"`: the approach velocity enters the Neumann gradient of
-/// the virtual pressures, the projection's own boundary condition: 1.035 / 1.018 at
+/// the virtual pressures, the projection's own boundary condition: 1.034 / 1.019 at
 /// 10 / 5 mm, the row under the plate at 1.0003 / 1.0010 V, first order in l0 (1.013 at
 /// 2.5 mm in a 2 m x 1 m tank).
 #[test]

@@ -390,8 +390,8 @@ fn wedge_force_coefficient_converges_with_spacing() {
 /// (23.26) bounds. Linear growth is checked on the impulse, whose origin the per-step
 /// scatter does not move much. The pressure is asserted at the default spacing
 /// (`wedge_force_and_pressure_at_default_spacing`): at 1 cm the peak is resolved by two
-/// or three particles. It reads C_F = 12.34 ± 1.13 (-12.1 %), 13.03 from the onset, impulse
-/// origin -0.36 ms.
+/// or three particles. It reads C_F = 12.50 ± 1.30 (-11.0 %), 13.21 from the onset, impulse
+/// origin -0.64 ms.
 #[test]
 fn wedge_force_grows_linearly_at_one_centimetre() {
     let fit = wedge_fit(&["particle_spacing=0.01".into()]);
