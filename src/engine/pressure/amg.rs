@@ -464,8 +464,8 @@ fn largest_eigenvalue(a: &CsrMatrix, diag: &[Real]) -> Real {
             break;
         }
         lambda = lambda.max(vav / vdv);
-        // v = D⁻¹A v, scaled to unit D-norm
-        let scale = 1.0 / (vdv.sqrt() * lambda.max(Real::MIN_POSITIVE));
+        // v = D⁻¹A v, rescaled to about unit D-norm (only its direction matters)
+        let scale = 1.0 / (vdv.sqrt() * lambda);
         for_rows(&mut v, |i, vi| {
             *vi = if diag[i] > 0.0 {
                 av[i] / diag[i] * scale
