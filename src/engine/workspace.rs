@@ -26,6 +26,8 @@ pub(crate) struct Scratch {
     /// u^n, before the explicit forces.
     pub(crate) u_start: Vec<Vec2>,
     pub(crate) n_star: Vec<Real>,
+    /// The source's ∇·u* at x* (walls' share with u^n).
+    pub(crate) div_star: Vec<Real>,
     pub(crate) unknown_of: Vec<u32>,
     pub(crate) particle_of: Vec<u32>,
     pub(crate) rhs: Vec<Real>,

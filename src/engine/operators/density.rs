@@ -1,21 +1,49 @@
 //! The particle number density n_i = Σ_j w(r_ij) (Koshizuka & Oka 1996; paper 003
-//! eq. 4), fluid neighbours only: a wall adds its own share
-//! (`WallContacts::number_density`).
+//! eq. 4) and the HS divergence of the velocity (paper 004 eq. 2), fluid neighbours
+//! only: a wall adds its own shares (`WallContacts::number_density`,
+//! `WallContacts::add_divergence`). The step needs both at the same positions, so they
+//! come from one pass over each neighbourhood.
 
 use super::Cloud;
 use crate::engine::kernel::Kernel;
-use crate::math::Real;
+use crate::math::{Real, Vec2};
+use rayon::prelude::*;
 
-/// n_i over the fluid neighbours (w vanishes at and beyond r_e); with multi-resolution
-/// Σ_j w(r_ij, r_e s_ij) v_ij (`resolution`).
+/// n_i over the fluid neighbours (w vanishes at and beyond r_e) and the HS divergence
+/// ⟨∇·u⟩_i = -c Σ_j w'(r) r_ij·u_ij / r, with c = d / |Σ w'(r) r| of the reference
+/// lattice ([`LatticeConstants::hs_divergence_coefficient`](super::LatticeConstants)), so
+/// that the divergence of x is d on the lattice. With multi-resolution each pair takes
+/// its radius r_e s_ij and volume factor v_ij (`resolution`).
 #[inline]
-pub fn number_density<K: Kernel>(cloud: &Cloud, i: usize) -> Real {
+pub fn number_density_and_divergence<K: Kernel>(
+    cloud: &Cloud,
+    u: &[Vec2],
+    c: Real,
+    i: usize,
+) -> (Real, Real) {
     let x = cloud.positions;
-    let mut n = 0.0;
+    let (mut n, mut s) = (0.0, 0.0);
     for &j in cloud.neighbors.of(i) {
         let j = j as usize;
+        let r = x[j] - x[i];
+        let d = r.norm();
         let (re, v) = cloud.pair(i, j);
-        n += K::w((x[j] - x[i]).norm(), re) * v;
+        n += K::w(d, re) * v;
+        if d > 0.0 && d < re {
+            s += K::dw(d, re) * r.dot(&(u[j] - u[i])) / d * v;
+        }
     }
-    n
+    (n, -c * s)
+}
+
+/// [`number_density_and_divergence`] of every particle: (n, ∇·u).
+pub fn number_density_and_divergence_all<K: Kernel>(
+    cloud: &Cloud,
+    u: &[Vec2],
+    c: Real,
+) -> (Vec<Real>, Vec<Real>) {
+    (0..cloud.len())
+        .into_par_iter()
+        .map(|i| number_density_and_divergence::<K>(cloud, u, c, i))
+        .unzip()
 }

@@ -23,8 +23,8 @@ mod laplacian;
 mod moments;
 mod second_derivatives;
 
-pub use density::number_density;
-pub use divergence::{divergence, hs_divergence};
+pub use density::{number_density_and_divergence, number_density_and_divergence_all};
+pub use divergence::divergence;
 pub use gradient::{
     corrected_gradient_matrix, gradient, gradient_row, minimum_over_neighbourhood,
     pressure_gradient, GradientRow, PressureGradient, VirtualPoints,

@@ -1,14 +1,14 @@
 //! Neighbours, particle number density (with the wall lattice, Harada et al. 2008) and
 //! the HS divergence of the velocity (paper 004 eq. 2), from `engine::operators` and the
-//! wall model.
+//! wall model. Number density and divergence are taken together, in one pass over the
+//! neighbours: at x* (n* and the source's ∇·u*) and at the end of the step (n and ∇·u
+//! for the error-compensating source).
 
 use crate::case::WallKinematics;
 use crate::engine::kernel::Kernel;
 use crate::engine::neighbors::NeighborList;
-use crate::engine::operators::{self, hs_divergence, Cloud};
-use crate::engine::resolution::Scales;
+use crate::engine::operators::{number_density_and_divergence_all, Cloud};
 use crate::engine::simulation::Simulation;
-use crate::engine::walls::WallContacts;
 use crate::math::{Real, Vec2};
 use rayon::prelude::*;
 
@@ -21,78 +21,67 @@ pub(super) fn neighbor_list(sim: &Simulation, x: &[Vec2]) -> NeighborList {
 
 /// n and ∇·u of the current state (before the first step).
 pub(super) fn initial_number_density_and_divergence<K: Kernel>(sim: &mut Simulation) {
-    let cloud = Cloud::new(
-        &sim.particles.position,
-        &sim.workspace.neighbors,
-        sim.config.params.re,
-    )
-    .with_scales(sim.scales());
-    let n = number_density::<K>(&cloud, &sim.workspace.contacts);
-    let div = hs_divergence::<K>(
-        &cloud,
-        &sim.particles.velocity,
-        sim.config.params.divergence_coefficient,
-    );
-    sim.particles.number_density = n;
+    let x = &sim.particles.position;
+    let u = &sim.particles.velocity;
+    let (fluid, div) = fluid_density_and_divergence::<K>(sim, x, u);
+    let contacts = &sim.workspace.contacts;
+    sim.particles.number_density = fluid
+        .par_iter()
+        .enumerate()
+        .map(|(i, &n)| contacts.number_density(i, n))
+        .collect();
     sim.particles.number_density_rate = div;
 }
 
-/// n_i of every particle, fluid neighbours and walls.
-fn number_density<K: Kernel>(cloud: &Cloud, contacts: &WallContacts) -> Vec<Real> {
-    (0..cloud.len())
-        .into_par_iter()
-        .map(|i| contacts.number_density(i, operators::number_density::<K>(cloud, i)))
-        .collect()
-}
-
-/// n* at the predicted positions.
-pub(super) fn compute_number_density<K: Kernel>(sim: &mut Simulation) {
-    let scales = Scales::new(&sim.particles.scale, sim.config.multi_resolution);
-    let cloud = Cloud::new(
-        &sim.workspace.scratch.x_star,
-        &sim.workspace.neighbors,
-        sim.config.params.re,
-    )
-    .with_scales(scales);
-    sim.workspace.scratch.n_star = number_density::<K>(&cloud, &sim.workspace.contacts);
-}
-
-/// The HS divergence of `u` at the positions of `cloud`, plus, when
-/// `scheme.wall_kinematics` is `source`, the walls' share -c ∇Z·(u_i - u_w) taken with
-/// the particle velocities `u_at_walls` (the source uses u^n there, the end of the step u).
-pub(super) fn divergence<K: Kernel>(
+/// The fluid neighbours' n and HS divergence of `u` at the positions `x`.
+fn fluid_density_and_divergence<K: Kernel>(
     sim: &Simulation,
-    cloud: &Cloud,
+    x: &[Vec2],
     u: &[Vec2],
-    u_at_walls: &[Vec2],
-) -> Vec<Real> {
-    let c = sim.config.params.divergence_coefficient;
-    let mut div = hs_divergence::<K>(cloud, u, c);
+) -> (Vec<Real>, Vec<Real>) {
+    let params = &sim.config.params;
+    let cloud = Cloud::new(x, &sim.workspace.neighbors, params.re).with_scales(sim.scales());
+    number_density_and_divergence_all::<K>(&cloud, u, params.divergence_coefficient)
+}
+
+/// The walls' share of the divergence, -c ∇Z·(u_i - u_w) with the particle velocities
+/// `u_at_walls`, when `scheme.wall_kinematics` is `source` (the source uses u^n there,
+/// the end of the step u).
+fn add_wall_divergence(sim: &Simulation, div: &mut [Real], u_at_walls: &[Vec2]) {
     if sim.config.method.wall_kinematics == WallKinematics::Source {
-        sim.workspace
-            .contacts
-            .add_divergence(&mut div, u_at_walls, c);
+        let c = sim.config.params.divergence_coefficient;
+        sim.workspace.contacts.add_divergence(div, u_at_walls, c);
     }
-    div
+}
+
+/// n* with the wall lattice and the source's ∇·u* at the predicted positions (the
+/// walls' share of the divergence with u^n).
+pub(super) fn compute_number_density_and_divergence<K: Kernel>(sim: &mut Simulation) {
+    let x = &sim.workspace.scratch.x_star;
+    let (fluid, mut div) = fluid_density_and_divergence::<K>(sim, x, &sim.particles.velocity);
+    add_wall_divergence(sim, &mut div, &sim.workspace.scratch.u_start);
+    let contacts = &sim.workspace.contacts;
+    sim.workspace.scratch.n_star = fluid
+        .par_iter()
+        .enumerate()
+        .map(|(i, &n)| contacts.number_density(i, n))
+        .collect();
+    sim.workspace.scratch.div_star = div;
 }
 
 /// n and ∇·u at the end of the step, for the error-compensating source: the walls' share
 /// of n carried from x* to the corrected positions to first order.
 pub(super) fn update_number_density_and_divergence<K: Kernel>(sim: &mut Simulation) {
     let (x, xs) = (&sim.particles.position, &sim.workspace.scratch.x_star);
-    let cloud =
-        Cloud::new(x, &sim.workspace.neighbors, sim.config.params.re).with_scales(sim.scales());
-    let contacts = &sim.workspace.contacts;
-    let n: Vec<Real> = (0..x.len())
-        .into_par_iter()
-        .map(|i| {
-            let fluid = operators::number_density::<K>(&cloud, i);
-            contacts.number_density_moved(i, fluid, x[i] - xs[i])
-        })
-        .collect();
-    // the same divergence as the source's (with or without the wall's virtual points)
     let u = &sim.particles.velocity;
-    let div = divergence::<K>(sim, &cloud, u, u);
-    sim.particles.number_density = n;
+    let (fluid, mut div) = fluid_density_and_divergence::<K>(sim, x, u);
+    // the same divergence as the source's (with or without the wall's virtual points)
+    add_wall_divergence(sim, &mut div, u);
+    let contacts = &sim.workspace.contacts;
+    sim.particles.number_density = fluid
+        .par_iter()
+        .enumerate()
+        .map(|(i, &n)| contacts.number_density_moved(i, n, x[i] - xs[i]))
+        .collect();
     sim.particles.number_density_rate = div;
 }

@@ -139,8 +139,8 @@ fn step<K: Kernel>(
         )
     });
     timed(&mut times.number_density, || {
-        // n* with the wall lattice (Harada et al. 2008)
-        density::compute_number_density::<K>(sim);
+        // n* with the wall lattice (Harada et al. 2008) and the source's ∇·u*
+        density::compute_number_density_and_divergence::<K>(sim);
         // n* < beta n0 confirmed by a one-sided neighbourhood (paper 003 §2.3)
         free_surface::detect_free_surface::<K>(sim);
     });

@@ -1,7 +1,6 @@
 //! The pressure Poisson equation: Neumann wall gradients, source, Laplacian rows,
 //! assembly and solve.
 
-use super::density::divergence;
 use super::walls::KernelWeights;
 use crate::case::{LaplacianKind, WallKinematics};
 use crate::engine::config::{Projection, Source};
@@ -86,12 +85,7 @@ pub(super) fn assemble_pressure_equation<K: Kernel>(
         }
     }
     // source term S of ∇²p - (rho alpha / dt²) p = S
-    let div_star = divergence::<K>(
-        sim,
-        &Cloud::new(x, nb, p.re).with_scales(scales),
-        &sim.particles.velocity,
-        &sim.workspace.scratch.u_start,
-    );
+    let div_star = &sim.workspace.scratch.div_star;
     let n_prev = &sim.particles.number_density;
     let div_prev = &sim.particles.number_density_rate;
     let n_star = &sim.workspace.scratch.n_star;
