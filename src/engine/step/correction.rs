@@ -22,12 +22,15 @@ pub(super) fn pressure_gradients<K: Kernel>(sim: &Simulation) -> Vec<Vec2> {
     let nb = &sim.workspace.neighbors;
     let n = x.len();
     let cloud = Cloud::new(x, nb, re).with_scales(sim.scales());
-    // minimum pressure over each neighbourhood (stability of the classic gradient)
-    let p_min: Vec<Real> = (0..n)
-        .into_par_iter()
-        .map(|i| minimum_over_neighbourhood(&cloud, p, i))
-        .collect();
     let form = sim.config.method.gradient;
+    // minimum pressure over each neighbourhood, for CMPS, which reads it at both ends of
+    // a pair (the other forms find their own where they need it)
+    let p_min: Option<Vec<Real>> = (form == GradientKind::Cmps).then(|| {
+        (0..n)
+            .into_par_iter()
+            .map(|i| minimum_over_neighbourhood(&cloud, p, i))
+            .collect()
+    });
     let gradient = PressureGradient {
         kind: form,
         classic: c_grad,
@@ -53,7 +56,7 @@ pub(super) fn pressure_gradients<K: Kernel>(sim: &Simulation) -> Vec<Vec2> {
                     .sum();
             }
             let walls = contacts.virtual_points(i, neumann);
-            pressure_gradient::<K>(&gradient, &cloud, p, &p_min, i, walls)
+            pressure_gradient::<K>(&gradient, &cloud, p, p_min.as_deref(), i, walls)
         })
         .collect()
 }
