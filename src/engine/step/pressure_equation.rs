@@ -6,7 +6,7 @@ use crate::case::{LaplacianKind, WallKinematics};
 use crate::engine::config::{Projection, Source};
 use crate::engine::kernel::Kernel;
 use crate::engine::operators::{for_each_lattice_coefficient, laplacian_row, Cloud, Normalisation};
-use crate::engine::pressure::{self, SolveParams};
+use crate::engine::pressure::{self, concat_into, RowChunk, SolveParams};
 use crate::engine::resolution::Scales;
 use crate::engine::simulation::{SimError, Simulation};
 use crate::engine::walls::WallContact;
@@ -210,48 +210,35 @@ pub(super) fn assemble_pressure_equation<K: Kernel>(
     // chunk, rows in order: deterministic), then copied into the previous step's
     // matrix buffers: no allocation per row and no second matrix alive at the peak.
     const CHUNK: usize = 2048;
-    let parts: Vec<(Vec<u32>, Vec<u32>, Vec<Real>, Vec<Real>)> = (0..nu.div_ceil(CHUNK))
+    let parts: Vec<(RowChunk, Vec<Real>)> = (0..nu.div_ceil(CHUNK))
         .into_par_iter()
         .map(|c| {
             let (lo, hi) = (c * CHUNK, ((c + 1) * CHUNK).min(nu));
-            let mut lens = Vec::with_capacity(hi - lo);
+            let mut rows = RowChunk {
+                lens: Vec::with_capacity(hi - lo),
+                ..RowChunk::default()
+            };
             let mut rhs = Vec::with_capacity(hi - lo);
             // at most one entry per neighbour plus the diagonal
             let bound: usize = (lo..hi)
                 .map(|row| nb.of(particle_of[row] as usize).len() + 1)
                 .sum();
-            let mut cols = Vec::with_capacity(bound);
-            let mut vals = Vec::with_capacity(bound);
+            rows.cols.reserve(bound);
+            rows.vals.reserve(bound);
             for row in lo..hi {
-                let before = cols.len();
-                rhs.push(row_entries(row, &mut cols, &mut vals));
-                lens.push((cols.len() - before) as u32);
+                let before = rows.cols.len();
+                rhs.push(row_entries(row, &mut rows.cols, &mut rows.vals));
+                rows.lens.push((rows.cols.len() - before) as u32);
             }
-            (lens, cols, vals, rhs)
+            (rows, rhs)
         })
         .collect();
-    let nnz = parts.iter().map(|p| p.1.len()).sum();
+    let (rows, rhs_parts): (Vec<RowChunk>, Vec<Vec<Real>>) = parts.into_iter().unzip();
     let mut m = std::mem::take(&mut sim.workspace.scratch.matrix);
-    m.n = nu;
-    m.row_ptr.clear();
-    m.col.clear();
-    m.val.clear();
-    m.row_ptr.reserve(nu + 1);
-    m.col.reserve(nnz);
-    m.val.reserve(nnz);
-    m.row_ptr.push(0);
+    m.fill_from_chunks(&rows);
     let mut rhs = std::mem::take(&mut sim.workspace.scratch.rhs);
-    rhs.clear();
-    let mut last = 0;
-    for (lens, cols, vals, b) in parts {
-        for l in lens {
-            last += l as usize;
-            m.row_ptr.push(last);
-        }
-        m.col.extend_from_slice(&cols);
-        m.val.extend_from_slice(&vals);
-        rhs.extend_from_slice(&b);
-    }
+    let rhs_parts: Vec<&[Real]> = rhs_parts.iter().map(|b| &b[..]).collect();
+    concat_into(&mut rhs, &rhs_parts);
     // warm start from the last pressures
     let mut solution = std::mem::take(&mut sim.workspace.scratch.solution);
     solution.clear();
