@@ -3,6 +3,7 @@
 //! fixed chunks of particles and concatenated in order, so the list (and every
 //! sum over it) is the same whatever the number of threads.
 
+use super::pressure::concat_into;
 use super::resolution::Scales;
 use crate::math::{Real, Vec2};
 use rayon::prelude::*;
@@ -221,14 +222,14 @@ impl NeighborList {
             .collect();
         let mut offsets = Vec::with_capacity(n + 1);
         offsets.push(0u32);
-        let total: usize = chunks.iter().map(|(_, idx)| idx.len()).sum();
-        let mut indices = Vec::with_capacity(total);
-        for (counts, idx) in chunks {
+        for (counts, _) in &chunks {
             for c in counts {
                 offsets.push(offsets.last().unwrap() + c);
             }
-            indices.extend_from_slice(&idx);
         }
+        let mut indices = Vec::new();
+        let pieces: Vec<&[u32]> = chunks.iter().map(|(_, idx)| &idx[..]).collect();
+        concat_into(&mut indices, &pieces);
         Self {
             radius,
             offsets,

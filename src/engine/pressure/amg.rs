@@ -13,7 +13,7 @@
 //! task in a fixed order, and the aggregation is sequential: results do not depend on
 //! the number of threads.
 
-use super::CsrMatrix;
+use super::{CsrMatrix, RowChunk};
 use crate::math::{deterministic_sum, Real};
 use nalgebra::{DMatrix, DVector};
 use rayon::prelude::*;
@@ -53,9 +53,6 @@ where
     }
 }
 
-/// Rows of a matrix built chunk by chunk: (row lengths, columns, values).
-type RowChunk = (Vec<usize>, Vec<u32>, Vec<Real>);
-
 /// Assemble a CSR matrix from rows computed by `row(i, acc)`, in parallel chunks of
 /// rows (each row by one task, in a fixed order: deterministic).
 fn build_rows<F>(n: usize, width: usize, row: F) -> CsrMatrix
@@ -73,9 +70,13 @@ where
             let before = acc.cols.len();
             acc.start = acc.offset + before;
             row(i, acc);
-            lens.push(acc.cols.len() - before);
+            lens.push((acc.cols.len() - before) as u32);
         }
-        (lens, acc.cols.clone(), acc.vals.clone())
+        RowChunk {
+            lens,
+            cols: acc.cols.clone(),
+            vals: acc.vals.clone(),
+        }
     };
     let chunks = n.div_ceil(CHUNK);
     let parts: Vec<RowChunk> = if n < PARALLEL_ROWS {
@@ -87,23 +88,8 @@ where
             .map_init(|| Accumulator::new(width), |acc, c| chunk(c, acc))
             .collect()
     };
-    let nnz = parts.iter().map(|p| p.1.len()).sum();
-    let mut m = CsrMatrix {
-        n,
-        row_ptr: Vec::with_capacity(n + 1),
-        col: Vec::with_capacity(nnz),
-        val: Vec::with_capacity(nnz),
-    };
-    m.row_ptr.push(0);
-    let mut last = 0;
-    for (lens, cols, vals) in parts {
-        for l in lens {
-            last += l;
-            m.row_ptr.push(last);
-        }
-        m.col.extend_from_slice(&cols);
-        m.val.extend_from_slice(&vals);
-    }
+    let mut m = CsrMatrix::default();
+    m.fill_from_chunks(&parts);
     m
 }
 

@@ -107,6 +107,10 @@ pub struct RowChunk {
 /// overwritten in place, so a buffer reused at a steady size is not cleared first.
 pub fn concat_into<T: Copy + Default + Send + Sync>(out: &mut Vec<T>, pieces: &[&[T]]) {
     let total = pieces.iter().map(|p| p.len()).sum();
+    if out.capacity() < total {
+        // zeroed pages from the allocator: first touched by the parallel copy below
+        *out = vec![T::default(); total];
+    }
     out.truncate(total);
     out.resize(total, T::default());
     let mut rest: &mut [T] = out;
