@@ -33,7 +33,7 @@ pub(super) fn remove_particles_outside_domain(sim: &mut Simulation) -> usize {
     let keep: Vec<bool> = sim
         .particles
         .position
-        .iter()
+        .par_iter()
         .map(|p| p.x >= lo.x && p.y >= lo.y && p.x <= hi.x && p.y <= hi.y)
         .collect();
     remove_particles(sim, &keep)
@@ -118,38 +118,45 @@ pub(super) fn check_health(sim: &Simulation) -> Result<Real, SimError> {
             time: sim.time,
         });
     }
-    let mut max_speed: Real = 0.0;
-    for i in 0..p.len() {
+    let limit = sim.config.control.speed_limit;
+    let n_max = 4.0 * sim.config.params.n0;
+    // what is wrong with particle i, checked in this order
+    let problem = |i: usize| -> Option<String> {
         let (x, u) = (p.position[i], p.velocity[i]);
         if !(x.x.is_finite() && x.y.is_finite()) {
-            return Err(fail(i, "non-finite position".into()));
+            return Some("non-finite position".into());
         }
         if !(u.x.is_finite() && u.y.is_finite()) {
-            return Err(fail(i, "non-finite velocity".into()));
+            return Some("non-finite velocity".into());
         }
         if !p.pressure[i].is_finite() {
-            return Err(fail(i, "non-finite pressure".into()));
+            return Some("non-finite pressure".into());
         }
         let s = u.norm();
-        if s > sim.config.control.speed_limit {
-            return Err(fail(
-                i,
-                format!(
-                    "runaway velocity {s:.3} m/s (limit {:.3} m/s)",
-                    sim.config.control.speed_limit
-                ),
+        if s > limit {
+            return Some(format!(
+                "runaway velocity {s:.3} m/s (limit {limit:.3} m/s)"
             ));
         }
-        if p.number_density[i] > 4.0 * sim.config.params.n0 {
-            return Err(fail(
-                i,
-                format!(
-                    "particle number density collapsed to {:.2} n0",
-                    p.number_density[i] / sim.config.params.n0
-                ),
+        if p.number_density[i] > n_max {
+            return Some(format!(
+                "particle number density collapsed to {:.2} n0",
+                p.number_density[i] / sim.config.params.n0
             ));
         }
-        max_speed = max_speed.max(s);
+        None
+    };
+    // the first particle in index order with a problem, whatever the number of threads
+    if let Some(i) = (0..p.len())
+        .into_par_iter()
+        .find_first(|&i| problem(i).is_some())
+    {
+        return Err(fail(i, problem(i).expect("found above")));
     }
+    let max_speed = p
+        .velocity
+        .par_iter()
+        .map(|u| u.norm())
+        .reduce(|| 0.0, Real::max);
     Ok(max_speed)
 }

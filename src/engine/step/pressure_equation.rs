@@ -57,18 +57,21 @@ pub(super) fn assemble_pressure_equation<K: Kernel>(
     let x = &sim.workspace.scratch.x_star;
     let nb = &sim.workspace.neighbors;
     let scales = Scales::new(&sim.particles.scale, sim.config.multi_resolution);
-    let surface = &mut sim.particles.free_surface;
     // a particle with no Laplacian neighbour cannot be solved for: Dirichlet
-    for i in 0..np {
-        if !surface[i]
-            && nb.of(i).iter().all(|&j| {
-                let s = scales.pair(i, j as usize).0;
-                weights.laplacian_scaled((x[j as usize] - x[i]).norm(), s) == 0.0
-            })
-        {
-            surface[i] = true;
-            sim.workspace.scratch.surface_pressure[i] = 0.0;
-        }
+    let surface = &sim.particles.free_surface;
+    let isolated: Vec<usize> = (0..np)
+        .into_par_iter()
+        .filter(|&i| {
+            !surface[i]
+                && nb.of(i).iter().all(|&j| {
+                    let s = scales.pair(i, j as usize).0;
+                    weights.laplacian_scaled((x[j as usize] - x[i]).norm(), s) == 0.0
+                })
+        })
+        .collect();
+    for i in isolated {
+        sim.particles.free_surface[i] = true;
+        sim.workspace.scratch.surface_pressure[i] = 0.0;
     }
     let dirichlet = &sim.workspace.scratch.surface_pressure;
     let surface = &sim.particles.free_surface;

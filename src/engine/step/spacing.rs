@@ -54,10 +54,15 @@ pub(super) fn keep_particles_apart(
             })
             .collect();
         let parts = &mut sim.particles;
-        for i in 0..n {
-            parts.velocity[i] += du[i];
-            parts.position[i] += du[i] * dt;
-        }
+        parts
+            .velocity
+            .par_iter_mut()
+            .zip(parts.position.par_iter_mut())
+            .zip(du.par_iter())
+            .for_each(|((u, x), du)| {
+                *u += du;
+                *x += du * dt;
+            });
     }
     let rw = sim.config.method.wall_repulsion_distance * l0;
     if rw > 0.0 {
