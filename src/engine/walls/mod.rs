@@ -115,7 +115,17 @@ impl PlacedWall {
             return None;
         }
         let mut best: Option<(Vec2, Real)> = None;
+        // a segment whose box, widened by the reach (and a margin for round-off), misses
+        // p is farther than the reach: most particles of a tank meet one segment or none
+        let margin = reach * (1.0 + 1e-9);
         for [a, b] in &self.surface {
+            if p.x < a.x.min(b.x) - margin
+                || p.x > a.x.max(b.x) + margin
+                || p.y < a.y.min(b.y) - margin
+                || p.y > a.y.max(b.y) + margin
+            {
+                continue;
+            }
             let c = closest_on_segment(p, *a, *b);
             let d = (c - p).norm();
             if d < reach && best.is_none_or(|(_, bd)| d < bd) {
