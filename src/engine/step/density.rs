@@ -24,12 +24,7 @@ pub(super) fn initial_number_density_and_divergence<K: Kernel>(sim: &mut Simulat
     let x = &sim.particles.position;
     let u = &sim.particles.velocity;
     let (fluid, div) = fluid_density_and_divergence::<K>(sim, x, u);
-    let contacts = &sim.workspace.contacts;
-    sim.particles.number_density = fluid
-        .par_iter()
-        .enumerate()
-        .map(|(i, &n)| contacts.number_density(i, n))
-        .collect();
+    sim.particles.number_density = with_walls(sim, &fluid);
     sim.particles.number_density_rate = div;
 }
 
@@ -42,6 +37,16 @@ fn fluid_density_and_divergence<K: Kernel>(
     let params = &sim.config.params;
     let cloud = Cloud::new(x, &sim.workspace.neighbors, params.re).with_scales(sim.scales());
     number_density_and_divergence_all::<K>(&cloud, u, params.divergence_coefficient)
+}
+
+/// n_i of every particle: its fluid neighbours' `fluid` plus the walls' shares.
+fn with_walls(sim: &Simulation, fluid: &[Real]) -> Vec<Real> {
+    let contacts = &sim.workspace.contacts;
+    fluid
+        .par_iter()
+        .enumerate()
+        .map(|(i, &n)| contacts.number_density(i, n))
+        .collect()
 }
 
 /// The walls' share of the divergence, -c ∇Z·(u_i - u_w) with the particle velocities
@@ -60,12 +65,7 @@ pub(super) fn compute_number_density_and_divergence<K: Kernel>(sim: &mut Simulat
     let x = &sim.workspace.scratch.x_star;
     let (fluid, mut div) = fluid_density_and_divergence::<K>(sim, x, &sim.particles.velocity);
     add_wall_divergence(sim, &mut div, &sim.workspace.scratch.u_start);
-    let contacts = &sim.workspace.contacts;
-    sim.workspace.scratch.n_star = fluid
-        .par_iter()
-        .enumerate()
-        .map(|(i, &n)| contacts.number_density(i, n))
-        .collect();
+    sim.workspace.scratch.n_star = with_walls(sim, &fluid);
     sim.workspace.scratch.div_star = div;
 }
 
