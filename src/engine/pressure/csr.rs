@@ -163,3 +163,37 @@ pub fn solve_direct(a: &CsrMatrix, b: &[Real], x: &mut [Real]) -> Result<SolveIn
         relative_residual: num / den,
     })
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn chunk(lens: &[u32], first_col: u32) -> RowChunk {
+        let nnz: u32 = lens.iter().sum();
+        RowChunk {
+            lens: lens.to_vec(),
+            cols: (first_col..first_col + nnz).collect(),
+            vals: (first_col..first_col + nnz).map(Real::from).collect(),
+        }
+    }
+
+    /// The rows of the chunks in order, whatever the buffers held before: longer (a
+    /// reused matrix that shrank), shorter, or nothing.
+    #[test]
+    fn fill_from_chunks_gives_the_chunks_rows_in_order() {
+        let chunks = [chunk(&[2, 0, 1], 0), chunk(&[3], 3), chunk(&[], 6)];
+        for old in [0usize, 4, 100] {
+            let mut m = CsrMatrix {
+                n: old,
+                row_ptr: vec![7; old + 1],
+                col: vec![9; old],
+                val: vec![-1.0; old],
+            };
+            m.fill_from_chunks(&chunks);
+            assert_eq!(m.n, 4);
+            assert_eq!(m.row_ptr, [0, 2, 2, 3, 6]);
+            assert_eq!(m.col, [0, 1, 2, 3, 4, 5]);
+            assert_eq!(m.val, [0.0, 1.0, 2.0, 3.0, 4.0, 5.0]);
+        }
+    }
+}
