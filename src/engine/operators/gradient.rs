@@ -214,14 +214,8 @@ pub fn pressure_gradient<K: Kernel>(
     walls: impl Iterator<Item = VirtualPoints>,
 ) -> Vec2 {
     let p_hat = || p_min.map_or_else(|| minimum_over_neighbourhood(cloud, p, i), |m| m[i]);
-    // Σ r_ij f(j) w(r)/r² over the pairs inside r_e
-    let sum = |f: &dyn Fn(usize) -> Real| {
-        let mut s = Vec2::zeros();
-        for_each_pair::<K>(cloud, i, |j, r, w, _, _| s += r * (f(j) * w));
-        s
-    };
     let minimum_pressure = |p_hat: Real, wall: &WallSums| {
-        let s_min = sum(&|j| p[j] - p_hat);
+        let s_min = weighted_sum::<K>(cloud, i, |j| p[j] - p_hat);
         (s_min + wall.m1 * (p[i] - p_hat) + wall.linear) * g.classic
     };
     match g.kind {
@@ -230,13 +224,13 @@ pub fn pressure_gradient<K: Kernel>(
         }
         GradientKind::Symmetric => {
             let wall = WallSums::of(walls, &mut Mat2::zeros());
-            let s_sym = sum(&|j| p[i] + p[j]);
+            let s_sym = weighted_sum::<K>(cloud, i, |j| p[i] + p[j]);
             (s_sym + wall.m1 * (2.0 * p[i]) + wall.linear) * g.classic
         }
         GradientKind::Cmps => {
             let wall = WallSums::of(walls, &mut Mat2::zeros());
             let m = p_min.expect("CMPS reads the neighbours' minimum pressures");
-            let s_sym = sum(&|j| p[i] + p[j] - m[i] - m[j]);
+            let s_sym = weighted_sum::<K>(cloud, i, |j| p[i] + p[j] - m[i] - m[j]);
             (s_sym + wall.m1 * (2.0 * (p[i] - m[i])) + wall.linear) * g.classic
         }
         _ => {
@@ -287,6 +281,14 @@ impl WallSums {
         }
         sums
     }
+}
+
+/// Σ r_ij f(j) w(r)/r² v_ij over the pairs of i inside r_e.
+#[inline]
+fn weighted_sum<K: Kernel>(cloud: &Cloud, i: usize, f: impl Fn(usize) -> Real) -> Vec2 {
+    let mut s = Vec2::zeros();
+    for_each_pair::<K>(cloud, i, |j, r, w, _, _| s += r * (f(j) * w));
+    s
 }
 
 /// `f(j, r_ij, w(r)/r² v_ij, r, s_ij)` for the neighbours j of i strictly inside the

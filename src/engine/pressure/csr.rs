@@ -110,9 +110,10 @@ pub fn concat_into<T: Copy + Default + Send + Sync>(out: &mut Vec<T>, pieces: &[
     if out.capacity() < total {
         // zeroed pages from the allocator: first touched by the parallel copy below
         *out = vec![T::default(); total];
+    } else {
+        out.truncate(total);
+        out.resize(total, T::default());
     }
-    out.truncate(total);
-    out.resize(total, T::default());
     let mut rest: &mut [T] = out;
     let mut targets = Vec::with_capacity(pieces.len());
     for p in pieces {
