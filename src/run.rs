@@ -199,7 +199,7 @@ pub fn run_case(
         .collect();
     let mut writer = RunWriter::create(
         out_dir,
-        case.output.load_interval,
+        case.output.load_interval.seconds(case.time.end),
         sim.wall_names(),
         coupling.is_some(),
         probes,

@@ -6,6 +6,7 @@
 
 pub mod layout;
 mod load;
+mod output;
 pub mod prescribed;
 mod refinement;
 pub mod schema;
@@ -13,6 +14,7 @@ mod scheme;
 mod validate;
 
 pub use load::{apply_override, load_case_file, parse_case_str, parse_case_value};
+pub use output::{LoadInterval, Output, Probe, SnapshotInterval};
 pub use refinement::{Refinement, RefinementRegions};
 pub use scheme::*;
 pub use validate::{estimated_particles, validate, Limits, MAX_VERTICES};
@@ -325,139 +327,4 @@ pub struct DampingZone {
     /// Damping rate at the outer edge, 1/s.
     #[schemars(range(min = 0))]
     pub strength: f64,
-}
-
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, JsonSchema)]
-#[serde(deny_unknown_fields)]
-pub struct Output {
-    /// Interval between rows of loads.csv, bodies.csv and probes.csv (s); null: every step.
-    #[serde(default = "default_load_interval")]
-    #[schemars(extend("exclusiveMinimum" = 0))]
-    pub load_interval: Option<f64>,
-    /// Interval between VTK snapshots (s); absent or "auto": ten over the run; "none" or
-    /// null: none.
-    #[serde(default)]
-    pub snapshot_interval: SnapshotInterval,
-    #[serde(default)]
-    pub probes: Vec<Probe>,
-    /// Width of the zero-phase moving-average filter applied to loads (s); null: automatic.
-    #[serde(default)]
-    #[schemars(extend("exclusiveMinimum" = 0))]
-    pub filter_window: Option<f64>,
-    /// Also write `energy.csv`: the fluid's kinetic and potential energy (J/m) at each
-    /// load sample (the standing-wave benchmark measures its decay from it).
-    #[serde(default)]
-    pub energy: bool,
-}
-
-/// When snapshots are written: a handful by default, so that every run has something to
-/// look at (ten cost the 30° wedge's default job about 1 % of its run time).
-#[derive(Debug, Clone, Copy, PartialEq, Default)]
-pub enum SnapshotInterval {
-    /// [`SnapshotInterval::AUTO_COUNT`] intervals over the run, plus t = 0.
-    #[default]
-    Auto,
-    /// No snapshots (`"none"`, or null as in earlier cases).
-    None,
-    /// One every so many seconds of simulated time.
-    Every(f64),
-}
-
-impl SnapshotInterval {
-    pub const AUTO_COUNT: f64 = 10.0;
-
-    /// Seconds between snapshots for a run ending at `end`, or None for no snapshots.
-    pub fn seconds(&self, end: f64) -> Option<f64> {
-        match *self {
-            Self::Auto => Some(end / Self::AUTO_COUNT),
-            Self::None => None,
-            Self::Every(s) => Some(s),
-        }
-        .filter(|s| *s > 0.0 && s.is_finite())
-    }
-}
-
-impl Serialize for SnapshotInterval {
-    fn serialize<S: serde::Serializer>(&self, s: S) -> Result<S::Ok, S::Error> {
-        match self {
-            Self::Auto => s.serialize_str("auto"),
-            Self::None => s.serialize_str("none"),
-            Self::Every(v) => s.serialize_f64(*v),
-        }
-    }
-}
-
-impl<'de> Deserialize<'de> for SnapshotInterval {
-    fn deserialize<D: serde::Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
-        struct Visitor;
-        impl serde::de::Visitor<'_> for Visitor {
-            type Value = SnapshotInterval;
-            fn expecting(&self, f: &mut std::fmt::Formatter) -> std::fmt::Result {
-                f.write_str("a number of seconds, \"auto\" or \"none\"")
-            }
-            fn visit_f64<E: serde::de::Error>(self, v: f64) -> Result<Self::Value, E> {
-                Ok(SnapshotInterval::Every(v))
-            }
-            fn visit_i64<E: serde::de::Error>(self, v: i64) -> Result<Self::Value, E> {
-                Ok(SnapshotInterval::Every(v as f64))
-            }
-            fn visit_u64<E: serde::de::Error>(self, v: u64) -> Result<Self::Value, E> {
-                Ok(SnapshotInterval::Every(v as f64))
-            }
-            fn visit_str<E: serde::de::Error>(self, v: &str) -> Result<Self::Value, E> {
-                match v {
-                    "auto" => Ok(SnapshotInterval::Auto),
-                    "none" => Ok(SnapshotInterval::None),
-                    _ => Err(E::invalid_value(serde::de::Unexpected::Str(v), &self)),
-                }
-            }
-            fn visit_unit<E: serde::de::Error>(self) -> Result<Self::Value, E> {
-                Ok(SnapshotInterval::None)
-            }
-            fn visit_none<E: serde::de::Error>(self) -> Result<Self::Value, E> {
-                Ok(SnapshotInterval::None)
-            }
-        }
-        d.deserialize_any(Visitor)
-    }
-}
-
-impl JsonSchema for SnapshotInterval {
-    fn schema_name() -> std::borrow::Cow<'static, str> {
-        "SnapshotInterval".into()
-    }
-    fn json_schema(_: &mut schemars::SchemaGenerator) -> schemars::Schema {
-        schemars::json_schema!({
-            "description": "Seconds between snapshots, \"auto\" (ten over the run) or \"none\" (null also means none).",
-            "anyOf": [
-                { "type": "number", "exclusiveMinimum": 0 },
-                { "type": "string", "enum": ["auto", "none"] },
-                { "type": "null" }
-            ]
-        })
-    }
-}
-
-fn default_load_interval() -> Option<f64> {
-    Some(1.0e-3)
-}
-
-impl Default for Output {
-    fn default() -> Self {
-        Self {
-            load_interval: default_load_interval(),
-            snapshot_interval: SnapshotInterval::Auto,
-            probes: Vec::new(),
-            filter_window: None,
-            energy: false,
-        }
-    }
-}
-
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, JsonSchema)]
-#[serde(deny_unknown_fields)]
-pub struct Probe {
-    #[schemars(extend("pattern" = r#"^[^,"\r\n]*[^\s,"][^,"\r\n]*$"#))]
-    pub name: String,
-    pub position: Point,
 }

@@ -137,7 +137,7 @@ pub fn filter_window(case: &Case) -> Real {
     let sample = case
         .output
         .load_interval
-        .filter(|v| *v > 0.0)
+        .seconds(case.time.end)
         .unwrap_or(case.time.max_dt);
     let passage = case
         .bodies

@@ -263,7 +263,7 @@ fn data_rows(path: &Path) -> usize {
 #[test]
 fn a_signal_ends_the_run_with_its_outputs_and_a_cancelled_summary() {
     let case = load_case_file(&tiny(), &[]).unwrap();
-    let interval = case.output.load_interval.unwrap();
+    let interval = case.output.load_interval.seconds(case.time.end).unwrap();
     let end = 1000.0; // over 10^6 steps at max_dt
     for (signal, name) in [(libc::SIGINT, "SIGINT"), (libc::SIGTERM, "SIGTERM")] {
         let dir = scratch(&format!("signal-{name}"));

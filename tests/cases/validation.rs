@@ -506,6 +506,37 @@ fn null_output_intervals_are_allowed() {
     validate(&parse_case_value(v).unwrap(), &Limits::default()).expect("null intervals are valid");
 }
 
+/// The load interval: absent or "auto" gives a thousand rows over the run, at most 1 ms
+/// apart (a 15 ms impact gets 15 µs rows, a 4 s run 1 ms ones); null gives every step;
+/// a word other than "auto" is rejected with the field's path.
+#[test]
+fn load_interval_auto_every_step_or_seconds() {
+    use mpsfsi::case::LoadInterval;
+    let mut v = base_value();
+    v["output"].as_object_mut().unwrap().remove("load_interval");
+    let absent = parse_case_value(v.clone()).unwrap();
+    assert_eq!(absent.output.load_interval, LoadInterval::Auto);
+    assert_eq!(LoadInterval::Auto.seconds(0.015), Some(0.015 / 1000.0));
+    assert_eq!(LoadInterval::Auto.seconds(4.0), Some(1.0e-3));
+    v["output"]["load_interval"] = json!("auto");
+    let auto = parse_case_value(v.clone()).unwrap();
+    assert_eq!(auto.output.load_interval, LoadInterval::Auto);
+    assert_eq!(
+        serde_json::to_value(&auto.output).unwrap()["load_interval"],
+        json!("auto")
+    );
+    v["output"]["load_interval"] = Value::Null;
+    let every = parse_case_value(v.clone()).unwrap();
+    assert_eq!(every.output.load_interval, LoadInterval::EveryStep);
+    assert_eq!(every.output.load_interval.seconds(1.0), None);
+    v["output"]["load_interval"] = json!(2.5e-4);
+    let fixed = parse_case_value(v.clone()).unwrap();
+    assert_eq!(fixed.output.load_interval.seconds(1.0), Some(2.5e-4));
+    v["output"]["load_interval"] = json!("often");
+    let e = parse_case_value(v).expect_err("an unknown word is not an interval");
+    assert_error(&e, "output.load_interval", "auto");
+}
+
 #[test]
 fn probe_outside_the_domain() {
     let e = rejected_json(|v| v["output"]["probes"][1]["position"] = json!([0.1, -0.7]));

@@ -184,11 +184,11 @@ pub(super) fn check_scalars(case: &Case) -> Check {
     }
 
     let o = &case.output;
-    if let Some(v) = o.load_interval {
+    if let crate::case::LoadInterval::Every(v) = o.load_interval {
         positive(
             "output.load_interval",
             v,
-            "the interval between load rows in s (null: every step)",
+            "the interval between load rows in s (\"auto\": a thousand over the run, null: every step)",
         )?;
     }
     if let crate::case::SnapshotInterval::Every(v) = o.snapshot_interval {
