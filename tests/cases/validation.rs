@@ -778,3 +778,40 @@ fn an_array_where_the_schema_has_an_object_is_rejected_with_its_path() {
     let e = parse_case_value(v).expect_err("a block is an object");
     assert_error(&e, "fluid_blocks[0]", "got an array");
 }
+
+/// The case README.md shows a new user ("Case format") is valid, follows the README's own
+/// advice for an impact (B/l0 >= 100, a tank 8B x 2.4B) and gets the particle count the
+/// README states (75 000, within 5 %).
+#[test]
+fn the_readme_example_case_is_valid_and_follows_its_advice() {
+    let readme =
+        std::fs::read_to_string(concat!(env!("CARGO_MANIFEST_DIR"), "/README.md")).unwrap();
+    let section = &readme[readme
+        .find("## Case format")
+        .expect("a Case format section")..];
+    let start = section.find("```json\n").expect("a json block") + "```json\n".len();
+    let text = &section[start..start + section[start..].find("```").unwrap()];
+    let case = mpsfsi::case::parse_case_str(text).expect("the README example parses");
+    validate(&case, &Limits::default()).expect("the README example is valid");
+    let xs: Vec<f64> = case.bodies[0].polygon.iter().map(|p| p[0]).collect();
+    let breadth =
+        xs.iter().cloned().fold(f64::MIN, f64::max) - xs.iter().cloned().fold(f64::MAX, f64::min);
+    assert!(
+        breadth / case.particle_spacing >= 100.0 - 1e-9,
+        "B/l0 = {}",
+        breadth / case.particle_spacing
+    );
+    let block = &case.fluid_blocks[0].polygon;
+    let width = block.iter().map(|p| p[0]).fold(f64::MIN, f64::max)
+        - block.iter().map(|p| p[0]).fold(f64::MAX, f64::min);
+    let depth = -block.iter().map(|p| p[1]).fold(f64::MAX, f64::min);
+    assert!(
+        width >= 8.0 * breadth - 1e-9 && depth >= 2.4 * breadth - 1e-9,
+        "tank {width} x {depth}"
+    );
+    let particles = mpsfsi::case::estimated_particles(&case).expect("an estimate");
+    assert!(
+        (particles / 75_000.0 - 1.0).abs() < 0.05,
+        "{particles} particles"
+    );
+}
