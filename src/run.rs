@@ -118,7 +118,8 @@ pub enum RunError {
 /// read 9.6 MN/m, 200 times its neighbours).
 pub fn step_to_end(time: Real, end: Real, dt: Real) -> Real {
     let rest = end - time;
-    if rest <= dt {
+    // a rest that is one step but for the round-off of the summed times is that step
+    if rest <= dt * (1.0 + 1e-9) {
         rest.max(1e-12)
     } else if rest < 2.0 * dt {
         0.5 * rest

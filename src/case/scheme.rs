@@ -253,6 +253,16 @@ pub struct Scheme {
     /// Zero disables the check.
     #[schemars(range(min = 0))]
     pub surface_asymmetry: f64,
+    /// A graded free surface: a particle near the edge of the test (n* between 0.90 n0
+    /// and the threshold, and a neighbourhood asymmetry between half and 1.5 times
+    /// `surface_asymmetry`) is neither a Dirichlet particle nor an interior one. Its row
+    /// of the pressure equation gets a penalty alpha (p - p_surface), alpha = s / (1 - s)
+    /// times the row's diagonal, s the product of the two ramps, so its pressure turns
+    /// on over a few steps as it submerges instead of in one. A particle flipping from
+    /// surface to interior next to a face released the pressure of its whole
+    /// neighbourhood in one step: the 30° user wedge at 5 mm had a per-step load
+    /// scatter of 0.57 with the binary test and 0.29 with the graded one.
+    pub soft_surface: bool,
     /// Weight of the minimum-pressure repulsion (p_i - p̂_i) Σ r w / r² added to the
     /// corrected gradient: 0 is pure GC, 1 makes it the classic gradient's stabilising part.
     #[schemars(range(min = 0))]
@@ -358,6 +368,7 @@ impl Default for Scheme {
             laplacian_radius: None,
             surface_threshold: 0.97,
             surface_asymmetry: 0.2,
+            soft_surface: true,
             gradient_stabilization: 1.0,
             stabilization_distance: 0.9,
             clip_negative_pressure: true,
@@ -396,6 +407,7 @@ impl Scheme {
             // well, still water ran away within 0.02-0.09 s at every spacing. Nor had it
             // hydrostatic ghosts or the surface offset.
             surface_asymmetry: 0.0,
+            soft_surface: false,
             hydrostatic_ghosts: false,
             surface_offset: false,
             velocity_filter: 0.0,

@@ -53,6 +53,8 @@ pub struct FreeSurface {
     pub threshold: Real,
     pub asymmetry: Real,
     pub offset: bool,
+    /// The graded test (`Scheme::soft_surface`).
+    pub soft: bool,
 }
 
 /// The corrected gradient's repulsive minimum-pressure term: `strength` over pairs
@@ -139,6 +141,7 @@ impl Method {
                 threshold: s.surface_threshold,
                 asymmetry: s.surface_asymmetry,
                 offset: s.surface_offset,
+                soft: s.soft_surface,
             },
             clip_negative_pressure: s.clip_negative_pressure,
             compressibility: s.compressibility,

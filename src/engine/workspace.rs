@@ -35,6 +35,9 @@ pub(crate) struct Scratch {
     pub(crate) neumann: Vec<Vec2>,
     /// Dirichlet value of each free-surface particle (0 elsewhere).
     pub(crate) surface_pressure: Vec<Real>,
+    /// Surface share s in (0, 1) of a particle at the edge of the graded surface test,
+    /// 0 elsewhere (`Scheme::soft_surface`).
+    pub(crate) surface_softness: Vec<Real>,
     pub(crate) matrix: CsrMatrix,
     /// The source's terms beyond (rho/dt) ∇·u* (ECS, PND relaxation), per particle, for
     /// the exact projection.

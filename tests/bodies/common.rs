@@ -85,7 +85,8 @@ pub fn run(
     let mut steps = Vec::new();
     let mut error = None;
     while sim.time < end - 1e-12 {
-        let proposed = sim.next_dt().min(end - sim.time);
+        // as `mpsfsi run` steps: no sliver of a step at the end (a load spike)
+        let proposed = mpsfsi::run::step_to_end(sim.time, end, sim.next_dt());
         let dt = match mpsfsi::run::advance(&mut sim, Some(&mut coupling), proposed) {
             Ok(info) => info.dt,
             Err(e) => {

@@ -29,12 +29,13 @@ pub(super) fn detect_free_surface<K: Kernel>(sim: &mut Simulation) {
     // so its hydrostatic pressure is rho g·m̂ l0/2 (m̂ the inward normal). Gravity only:
     // an estimate from the previous pressure gradient feeds back into itself (measured:
     // a still tank drifted 2.5% after 1.3 s).
-    let flags: Vec<(bool, Real)> = (0..x.len())
+    let soft = sim.config.method.free_surface.soft;
+    let flags: Vec<(bool, Real, Real)> = (0..x.len())
         .into_par_iter()
         .map(|i| {
             let n = n_star[i];
             if n >= beta * n0 {
-                return (false, 0.0);
+                return (false, 0.0, 0.0);
             }
             let mut m = Vec2::zeros();
             for &j in nb.of(i) {
@@ -52,22 +53,52 @@ pub(super) fn detect_free_surface<K: Kernel>(sim: &mut Simulation) {
             }
             // the particle's own spacing
             let l0 = l0 * scales.of(i);
-            let one_sided = m.norm() * l0 / n.max(1e-12) > asym_limit;
-            let surface = asym_limit <= 0.0 || n < 0.8 * n0 || one_sided;
-            if !surface {
-                return (false, 0.0);
-            }
+            let asym = m.norm() * l0 / n.max(1e-12);
             let value = if offset && m.norm() > 0.0 {
                 surface_value(rho_g, m / m.norm(), l0)
             } else {
                 0.0
             };
-            (true, value)
+            if soft && asym_limit > 0.0 && n >= 0.8 * n0 {
+                let s = surface_share(n / n0, beta, asym / asym_limit);
+                return match s {
+                    s if s >= SOFT_DIRICHLET => (true, value, 0.0),
+                    s if s > 0.0 => (false, value, s),
+                    _ => (false, 0.0, 0.0),
+                };
+            }
+            let one_sided = asym > asym_limit;
+            let surface = asym_limit <= 0.0 || n < 0.8 * n0 || one_sided;
+            if !surface {
+                return (false, 0.0, 0.0);
+            }
+            (true, value, 0.0)
         })
         .collect();
     sim.particles.free_surface = flags.iter().map(|f| f.0).collect();
     sim.workspace.scratch.surface_pressure = flags.iter().map(|f| f.1).collect();
+    sim.workspace.scratch.surface_softness = flags.iter().map(|f| f.2).collect();
     release_isolated_clusters(sim);
+}
+
+/// The graded test's ramps: the surface share falls from 1 at n* = `SOFT_DENSITY_LOW`
+/// n0 to 0 at the threshold, and from 1 at `1 + SOFT_ASYMMETRY_BAND` times the
+/// asymmetry limit to 0 at `1 - SOFT_ASYMMETRY_BAND` times it; the particle's share is
+/// the product. Bands this wide let a jet-root particle, which moves about 0.2 l0 a
+/// step, take three or four steps to submerge.
+const SOFT_DENSITY_LOW: Real = 0.90;
+const SOFT_ASYMMETRY_BAND: Real = 0.5;
+/// A share at least this high is a Dirichlet particle (the penalty would be 1000 times
+/// the row's diagonal).
+const SOFT_DIRICHLET: Real = 0.999;
+
+/// Surface share s in [0, 1] of a particle with fill `fill` = n*/n0 and asymmetry
+/// `asymmetry` (a ratio of the limit), `beta` the threshold.
+fn surface_share(fill: Real, beta: Real, asymmetry: Real) -> Real {
+    let by_density = ((beta - fill) / (beta - SOFT_DENSITY_LOW)).clamp(0.0, 1.0);
+    let by_asymmetry =
+        ((asymmetry - 1.0 + SOFT_ASYMMETRY_BAND) / (2.0 * SOFT_ASYMMETRY_BAND)).clamp(0.0, 1.0);
+    by_density * by_asymmetry
 }
 
 /// Largest group of particles, cut off from every free-surface particle, that is taken
@@ -167,4 +198,28 @@ pub(super) fn surface_value(rho_g: Vec2, m_hat: Vec2, l0: Real) -> Real {
     }
     let cos = rho_g.dot(&m_hat) / weight;
     weight * 0.5 * l0 * (cos / LEVEL_SURFACE_COS).clamp(0.0, 1.0)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The graded test's share: 1 (Dirichlet) deep in both ramps, 0 (interior) at the
+    /// threshold or at half the asymmetry limit, the product in between, and never
+    /// rising as a particle fills up or its neighbourhood evens out.
+    #[test]
+    fn surface_share_ramps_between_interior_and_dirichlet() {
+        let beta = 0.97;
+        assert_eq!(surface_share(0.90, beta, 1.5), 1.0);
+        assert_eq!(surface_share(0.85, beta, 3.0), 1.0);
+        assert_eq!(surface_share(beta, beta, 3.0), 0.0);
+        assert_eq!(surface_share(0.85, beta, 0.5), 0.0);
+        assert!((surface_share(0.935, beta, 1.0) - 0.25).abs() < 1e-12);
+        let mut last = 1.0;
+        for k in 0..=70 {
+            let s = surface_share(0.90 + 0.001 * k as Real, beta, 1.2);
+            assert!(s <= last);
+            last = s;
+        }
+    }
 }

@@ -73,6 +73,20 @@ pub(super) fn assemble_pressure_equation<K: Kernel>(
         sim.particles.free_surface[i] = true;
         sim.workspace.scratch.surface_pressure[i] = 0.0;
     }
+    // a particle at the edge of the graded surface test: alpha (p_i - p_surface) with
+    // alpha = s / (1 - s) times the row's diagonal (`Scheme::soft_surface`)
+    let (softness, surface_value) = (
+        &sim.workspace.scratch.surface_softness,
+        &sim.workspace.scratch.surface_pressure,
+    );
+    let soften = |i: usize, diag: &mut Real, b: &mut Real| {
+        let s = softness.get(i).copied().unwrap_or(0.0);
+        if s > 0.0 {
+            let alpha = *diag * s / (1.0 - s);
+            *diag += alpha;
+            *b += alpha * surface_value[i];
+        }
+    };
     let dirichlet = &sim.workspace.scratch.surface_pressure;
     let surface = &sim.particles.free_surface;
     // the previous step's index maps, refilled (no allocation at a steady size)
@@ -162,6 +176,7 @@ pub(super) fn assemble_pressure_equation<K: Kernel>(
                 diag += c;
                 b += off_diagonal(j, c, cols, vals);
             }
+            soften(i, &mut diag, &mut b);
             cols.push(row as u32);
             vals.push(diag);
             return b;
@@ -178,6 +193,7 @@ pub(super) fn assemble_pressure_equation<K: Kernel>(
             diag += l;
             b += off_diagonal(j, l, cols, vals);
         });
+        soften(i, &mut diag, &mut b);
         cols.push(row as u32);
         vals.push(diag);
         let wall_scale = fills.map_or(1.0, |f| 1.0 / f[i]);
