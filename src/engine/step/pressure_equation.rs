@@ -73,22 +73,19 @@ pub(super) fn assemble_pressure_equation<K: Kernel>(
         sim.particles.free_surface[i] = true;
         sim.workspace.scratch.surface_pressure[i] = 0.0;
     }
+    let dirichlet = &sim.workspace.scratch.surface_pressure;
+    let surface = &sim.particles.free_surface;
     // a particle at the edge of the graded surface test: alpha (p_i - p_surface) with
     // alpha = s / (1 - s) times the row's diagonal (`Scheme::soft_surface`)
-    let (softness, surface_value) = (
-        &sim.workspace.scratch.surface_softness,
-        &sim.workspace.scratch.surface_pressure,
-    );
+    let softness = &sim.workspace.scratch.surface_softness;
     let soften = |i: usize, diag: &mut Real, b: &mut Real| {
         let s = softness.get(i).copied().unwrap_or(0.0);
         if s > 0.0 {
             let alpha = *diag * s / (1.0 - s);
             *diag += alpha;
-            *b += alpha * surface_value[i];
+            *b += alpha * dirichlet[i];
         }
     };
-    let dirichlet = &sim.workspace.scratch.surface_pressure;
-    let surface = &sim.particles.free_surface;
     // the previous step's index maps, refilled (no allocation at a steady size)
     let mut unknown_of = std::mem::take(&mut sim.workspace.scratch.unknown_of);
     let mut particle_of = std::mem::take(&mut sim.workspace.scratch.particle_of);
