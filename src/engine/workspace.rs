@@ -33,7 +33,8 @@ pub(crate) struct Scratch {
     pub(crate) rhs: Vec<Real>,
     pub(crate) solution: Vec<Real>,
     pub(crate) neumann: Vec<Vec2>,
-    /// Dirichlet value of each free-surface particle (0 elsewhere).
+    /// Dirichlet value of each free-surface particle, and the penalty's target of each
+    /// graded one (0 elsewhere).
     pub(crate) surface_pressure: Vec<Real>,
     /// Surface share s in (0, 1) of a particle at the edge of the graded surface test,
     /// 0 elsewhere (`Scheme::soft_surface`).

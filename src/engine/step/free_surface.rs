@@ -7,7 +7,9 @@ use crate::math::{vec2, Real, Vec2};
 use rayon::prelude::*;
 
 /// Free surface: n* < beta n0, confirmed by a one-sided neighbourhood
-/// (|Σ w r/r²| l0 / n above `surface_asymmetry`); below 0.8 n0 always.
+/// (|Σ w r/r²| l0 / n above `surface_asymmetry`); below 0.8 n0 always. With the graded
+/// test a particle near the edge of both is neither: it gets a surface share
+/// (`surface_share`) that the pressure equation turns into a penalty.
 pub(super) fn detect_free_surface<K: Kernel>(sim: &mut Simulation) {
     let (x, nb, contacts) = (
         &sim.workspace.scratch.x_star,
