@@ -136,34 +136,3 @@ fn a_run_ends_without_a_sliver_of_a_step() {
     let shortest = steps.iter().copied().fold(f64::INFINITY, f64::min);
     assert!(shortest >= 0.5 * dt, "shortest step {shortest} of {dt}");
 }
-
-/// A wedge at the surface wets its faces at Wagner's c' = π V / (2 tan β), and the
-/// first step holds that front to the Courant number (10°: c' = 54.8 m/s at 6.15 m/s,
-/// a step of 36.5 µs at 1 cm where the body's speed alone allows 325 µs); lifted clear
-/// of the water the same body has no front and the step follows its speed.
-#[test]
-fn the_wetting_front_sets_the_step_of_a_body_in_the_water() {
-    let mut case = wedge(0.01);
-    let (half, height) = (0.25, 0.25 * 10f64.to_radians().tan());
-    case.bodies[0].polygon = vec![
-        [0.0, 0.0],
-        [half, height],
-        [half, 0.3],
-        [-half, 0.3],
-        [-half, height],
-    ];
-    let front = std::f64::consts::PI * 6.15 / (2.0 * 10f64.to_radians().tan());
-    let sim = Simulation::new(&case);
-    let got = sim.wetting_front_speed();
-    assert!((got / front - 1.0).abs() < 1e-9, "{got} vs {front}");
-    let dt = sim.next_dt();
-    let expected = case.time.cfl * 0.01 / front;
-    assert!((dt / expected - 1.0).abs() < 1e-9, "dt {dt} vs {expected}");
-    // a body out of reach of every particle (the kernel reaches 2.1 l0)
-    case.bodies[0].position[1] = 0.1;
-    let sim = Simulation::new(&case);
-    assert_eq!(sim.wetting_front_speed(), 0.0);
-    let dt = sim.next_dt();
-    let by_speed = (case.time.cfl * 0.01 / 6.15).min(case.time.max_dt);
-    assert!((dt / by_speed - 1.0).abs() < 1e-9, "dt {dt} vs {by_speed}");
-}
