@@ -198,25 +198,3 @@ pub fn segments_intersect(a: Vec2, b: Vec2, c: Vec2, d: Vec2) -> bool {
     ((d1 > 0.0 && d2 < 0.0) || (d1 < 0.0 && d2 > 0.0))
         && ((d3 > 0.0 && d4 < 0.0) || (d3 < 0.0 && d4 > 0.0))
 }
-
-/// Deadrise angle (rad) at the vertex of `polygon` (object frame, rotated by `angle`)
-/// that leads in the direction of `velocity`: the mean angle of its two edges to the
-/// plane normal to the motion. None when the body does not move or the angle is
-/// outside 5°..85° (flat or needle-like: no wedge-entry time scale).
-pub fn leading_deadrise(polygon: &[Vec2], angle: Real, velocity: Vec2) -> Option<Real> {
-    let speed = velocity.norm();
-    if polygon.len() < 3 || !(speed > 0.0) {
-        return None;
-    }
-    let d = velocity / speed;
-    let pts: Vec<Vec2> = polygon.iter().map(|p| rotate(*p, angle)).collect();
-    let lead = (0..pts.len()).max_by(|&a, &b| pts[a].dot(&d).total_cmp(&pts[b].dot(&d)))?;
-    let n = pts.len();
-    let mut sum = 0.0;
-    for other in [(lead + 1) % n, (lead + n - 1) % n] {
-        let e = pts[other] - pts[lead];
-        sum += e.dot(&d).abs().atan2(cross(e, d).abs());
-    }
-    let beta = 0.5 * sum;
-    (5.0..=85.0).contains(&beta.to_degrees()).then_some(beta)
-}

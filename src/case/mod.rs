@@ -294,10 +294,8 @@ pub struct TimeControl {
     #[schemars(extend("exclusiveMinimum" = 0))]
     pub end: f64,
     /// Courant number: dt <= cfl * l0 / u_max, also with each particle's last
-    /// acceleration and with the wetting front of a body entering the water (Wagner's
-    /// pi V / (2 tan beta), beta its leading deadrise, 5 to 85 degrees), and a step in
-    /// which a particle would move more than 1.5 cfl spacings is repeated shorter (the jet
-    /// root of an impact; summary `steps_repeated`).
+    /// acceleration, and a step in which a particle would move more than 1.5 cfl
+    /// spacings is repeated shorter (the jet root of an impact; summary `steps_repeated`).
     #[serde(default = "default_cfl")]
     #[schemars(extend("exclusiveMinimum" = 0))]
     pub cfl: f64,

@@ -9,7 +9,6 @@ use super::scene::{build_scene, Scene};
 use super::walls::WallObject;
 use super::workspace::Workspace;
 use crate::case::Case;
-use crate::geometry::leading_deadrise;
 use crate::math::{vec2, Real, Vec2};
 
 /// Why a run stopped early.
@@ -252,7 +251,6 @@ impl Simulation {
         }
         let l0 = self.config.params.l0;
         let mut dt = self.config.control.max_dt;
-        let u = u.max(self.wetting_front_speed());
         if u > 0.0 {
             dt = dt.min(self.config.control.cfl * l0 / u);
         }
@@ -274,36 +272,6 @@ impl Simulation {
             dt = dt.min((2.0 * self.config.control.cfl * l0 / g).sqrt());
         }
         dt
-    }
-
-    /// The fastest wetting front of a body in contact with the water: a body entering
-    /// with speed V whose leading vertex has deadrise β (5° to 85°) wets its faces at
-    /// Wagner's rate c' = π V / (2 tan β), and the pressure peak at the jet root moves
-    /// with it. `next_dt` holds it to the Courant number like a particle: on a 10°
-    /// wedge at B/l0 = 100 the particles alone set steps in which the root crossed
-    /// 0.4 l0, and a first step 3.6 % of the entry long, which put the force's onset
-    /// late: C_F read +8.2 % over four lattice offsets, +4.7 % with this bound. Flat and
-    /// needle-like bodies have no such front (`leading_deadrise`), and a body out of
-    /// the water none yet.
-    pub fn wetting_front_speed(&self) -> Real {
-        let touching = |k: usize| {
-            self.workspace
-                .contacts
-                .contacts
-                .iter()
-                .any(|c| c.object as usize == k)
-        };
-        self.walls
-            .iter()
-            .enumerate()
-            .filter(|(_, w)| w.body.is_some())
-            .filter_map(|(k, w)| {
-                let polygon = w.shape.loops.first()?;
-                let beta = leading_deadrise(polygon, w.state.angle, w.state.velocity)?;
-                touching(k)
-                    .then(|| std::f64::consts::PI * w.state.velocity.norm() / (2.0 * beta.tan()))
-            })
-            .fold(0.0, Real::max)
     }
 
     /// Names of the wall objects (fixed walls first, then bodies), as in `loads`.

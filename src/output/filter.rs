@@ -16,8 +16,7 @@
 
 use super::loads_csv::parse_loads_csv;
 use crate::case::{Case, Motion};
-use crate::geometry::leading_deadrise;
-use crate::math::{vec2, Real};
+use crate::math::Real;
 use std::collections::BTreeMap;
 use std::io;
 use std::path::Path;
@@ -146,8 +145,7 @@ pub fn filter_window(case: &Case) -> Real {
         .filter_map(|b| {
             let (Motion::Prescribed { velocity, .. } | Motion::Free { velocity, .. }) = &b.motion;
             let speed = (velocity[0] * velocity[0] + velocity[1] * velocity[1]).sqrt();
-            let polygon: Vec<_> = b.polygon.iter().map(|p| vec2(*p)).collect();
-            let beta = leading_deadrise(&polygon, b.angle, vec2(*velocity))?;
+            let beta = leading_deadrise(&b.polygon, b.angle, *velocity)?;
             Some(2.0 * case.particle_spacing * beta.tan() / (std::f64::consts::PI * speed))
         })
         .fold(None, |acc: Option<Real>, p| {
@@ -157,6 +155,36 @@ pub fn filter_window(case: &Case) -> Real {
         Some(p) => (WEDGE_WINDOW_PERIODS * p).max(sample),
         None => DEFAULT_WINDOW_SAMPLES * sample,
     }
+}
+
+/// Deadrise angle (rad) at the vertex of `polygon` (body frame, rotated by `angle`)
+/// that leads in the direction of `velocity`: the mean angle of its two edges to the
+/// plane normal to the motion. None when the body does not move or the angle is
+/// outside 5°..85° (flat or needle-like: no wedge-entry time scale).
+pub fn leading_deadrise(polygon: &[[Real; 2]], angle: Real, velocity: [Real; 2]) -> Option<Real> {
+    let speed = (velocity[0] * velocity[0] + velocity[1] * velocity[1]).sqrt();
+    if polygon.len() < 3 || !(speed > 0.0) {
+        return None;
+    }
+    let d = [velocity[0] / speed, velocity[1] / speed];
+    let (s, c) = angle.sin_cos();
+    let pts: Vec<[Real; 2]> = polygon
+        .iter()
+        .map(|p| [c * p[0] - s * p[1], s * p[0] + c * p[1]])
+        .collect();
+    let ahead = |p: &[Real; 2]| p[0] * d[0] + p[1] * d[1];
+    let lead = (0..pts.len()).max_by(|&a, &b| ahead(&pts[a]).total_cmp(&ahead(&pts[b])))?;
+    let n = pts.len();
+    let mut sum = 0.0;
+    for other in [(lead + 1) % n, (lead + n - 1) % n] {
+        let e = [pts[other][0] - pts[lead][0], pts[other][1] - pts[lead][1]];
+        let along = (e[0] * d[0] + e[1] * d[1]).abs();
+        let across = (e[0] * d[1] - e[1] * d[0]).abs();
+        sum += along.atan2(across);
+    }
+    let beta = 0.5 * sum;
+    let deg = beta.to_degrees();
+    (5.0..=85.0).contains(&deg).then_some(beta)
 }
 
 /// Read `run_dir/loads.csv`, filter each body's fx, fy, mz with a window of

@@ -265,10 +265,9 @@ impl PressureProfile {
 /// the similarity solution, with the
 /// origin at the keel contact within 10 % (the first wetted rows lag, and it reads
 /// 0.35-0.75 t_chine), and the pressure along the faces,
-/// averaged over the window, within 25 % of its table and 30 % of its peak (6.927: the
-/// jet root is resolved by two or three particles, and where it sits between them moves
-/// the averaged peak: 5.05 and 5.48 in two runs that differ only in the length of their
-/// first steps). Measured numbers: docs/validation.md.
+/// averaged over the window, within 25 % of its table and 27 % of its peak (6.927: the
+/// jet root is resolved by two or three particles, and the fill floor of the pressure
+/// Laplacian lowers the peak from 5.21 to 5.16). Measured numbers: docs/validation.md.
 #[test]
 fn wedge_force_and_pressure_at_default_spacing() {
     let fit = wedge_fit(&[]);
@@ -293,7 +292,7 @@ fn wedge_force_and_pressure_at_default_spacing() {
     );
     let (_, cp_peak) = peak(&fit.profile);
     assert!(
-        (cp_peak / 6.927 - 1.0).abs() < 0.30,
+        (cp_peak / 6.927 - 1.0).abs() < 0.27,
         "peak Cp {cp_peak:.3} vs 6.927"
     );
     for (z, cp) in CP_TABLE {
