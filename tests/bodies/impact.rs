@@ -27,7 +27,7 @@ fn user_wedge(deadrise: f64, spacing: f64, end: f64) -> String {
     let top = height + 0.2;
     format!(
         r#"{{
-  "name": "user-wedge-{deadrise}",
+  "name": "user-wedge-{deadrise}-{spacing}",
   "fluid": {{ "density": 1000.0, "gravity": [0.0, 0.0] }},
   "particle_spacing": {spacing},
   "domain": {{ "min": [{lo}, {dlo}], "max": [{hi}, {dhi}] }},
@@ -135,14 +135,19 @@ fn assert_no_spikes(name: &str, loads: &[(f64, f64)], steps: u64, t_chine: f64) 
 /// Runs the user-style wedge of `deadrise` degrees at B/l0 = 100 and returns the
 /// relative error of C_F against `reference`.
 fn wedge_error(deadrise: f64, reference: f64) -> f64 {
+    wedge_error_at(deadrise, reference, 0.005)
+}
+
+/// [`wedge_error`] at the spacing `l0`.
+fn wedge_error_at(deadrise: f64, reference: f64, l0: f64) -> f64 {
     let t_chine = chine_time(deadrise);
     // t0 comes within a few spacings of the keel contact: run to 0.85 t_chine after it
     let end = t_chine + 0.002;
-    let (loads, summary) = run_user_case(&user_wedge(deadrise, 0.005, end), "wedge");
+    let (loads, summary) = run_user_case(&user_wedge(deadrise, l0, end), "wedge");
     let (c, t0) = force_coefficient(&loads, t_chine);
     let err = c / reference - 1.0;
     println!(
-        "user wedge {deadrise}°: C_F {c:.3} against {reference} ({:+.1} %), t0 {:.3} ms, per-step scatter {:.2}; {} particles, {} steps ({} repeated), max speed {:.1} m/s, {} runaways, {:.0} s",
+        "user wedge {deadrise}° at l0 {l0}: C_F {c:.3} against {reference} ({:+.1} %), t0 {:.3} ms, per-step scatter {:.2}; {} particles, {} steps ({} repeated), max speed {:.1} m/s, {} runaways, {:.0} s",
         100.0 * err,
         1e3 * t0,
         step_scatter(&loads, t0, t_chine),
@@ -196,6 +201,15 @@ fn user_wedge_10_degrees_with_defaults() {
         "10°: C_F {c:.2} ± {se:.2} against 211.7 ({:+.1} %)",
         100.0 * err
     );
+    assert!(err.abs() < 0.05, "{:+.1} %", 100.0 * err);
+}
+
+/// 10° with refinement: at B/l0 = 200 the first step is half as long (its bias of the
+/// onset reading +2.9 % instead of +5.8 %) and the jet root twice as well resolved.
+#[test]
+#[ignore = "7 minutes on two cores; passes: -1.0 % on the axis (t0 0.081 ms)"]
+fn user_wedge_10_degrees_at_twice_the_resolution() {
+    let err = wedge_error_at(10.0, 211.7, 0.0025);
     assert!(err.abs() < 0.05, "{:+.1} %", 100.0 * err);
 }
 
