@@ -1,6 +1,7 @@
 //! `mpsfsi check CASE [--set PATH=VALUE]...`: validate, build the scene, report.
 
 use super::report_case_error;
+use mpsfsi::analysis::envelope::impact_advice;
 use mpsfsi::case::{estimated_particles, load_case_file, validate, CaseError, Limits};
 use mpsfsi::engine::params::MpsParameters;
 use mpsfsi::engine::scene::build_scene;
@@ -52,6 +53,9 @@ pub fn check(case_path: &Path, overrides: &[String], max_particles: Option<usize
         case.time.cfl,
         case.time.max_dt
     );
+    for advice in impact_advice(&case) {
+        println!("advice: {advice}");
+    }
     println!(
         "walls: {}, bodies: {}, probes: {}",
         case.walls.len(),

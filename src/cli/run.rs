@@ -6,6 +6,7 @@
 
 use super::progress::ProgressBarObserver;
 use super::{report_case_error, EXIT_ERROR, EXIT_FAILED_RUN};
+use mpsfsi::analysis::envelope::impact_advice;
 use mpsfsi::case::{load_case_file, Limits, ValidCase};
 use mpsfsi::run::{run_case, RunStatus};
 use std::path::Path;
@@ -19,6 +20,9 @@ pub fn run(case_path: &Path, out: &Path, overrides: &[String]) -> i32 {
         Ok(case) => case,
         Err(e) => return report_case_error(&e),
     };
+    for advice in impact_advice(&case) {
+        eprintln!("advice: {advice}");
+    }
     if let Err(e) = std::fs::create_dir_all(out) {
         eprintln!(
             "error: cannot create the run directory {}: {e}",

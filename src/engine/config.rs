@@ -215,18 +215,8 @@ const MIN_DEADRISE: Real = 5.0 * std::f64::consts::PI / 180.0;
 pub fn jet_root_speed(body: &crate::case::Body, gravity: Vec2, fall: Real) -> Real {
     use crate::case::Motion;
     let (velocity, speed) = match &body.motion {
-        Motion::Prescribed {
-            velocity, table, ..
-        } => {
-            let fastest = table
-                .iter()
-                .flatten()
-                .map(|s| vec2(s.velocity))
-                .chain(std::iter::once(vec2(*velocity)))
-                .fold(
-                    Vec2::zeros(),
-                    |a, b| if b.norm() > a.norm() { b } else { a },
-                );
+        Motion::Prescribed { .. } => {
+            let fastest = fastest_prescribed_velocity(body);
             (fastest, fastest.norm())
         }
         Motion::Free { velocity, .. } => {
@@ -238,7 +228,34 @@ pub fn jet_root_speed(body: &crate::case::Body, gravity: Vec2, fall: Real) -> Re
     if speed <= 0.0 || velocity.norm() <= 0.0 {
         return 0.0;
     }
-    let d = velocity / velocity.norm();
+    match leading_deadrise(body, velocity / velocity.norm()) {
+        Some(deadrise) => std::f64::consts::PI * speed / (2.0 * deadrise.max(MIN_DEADRISE).tan()),
+        None => 0.0,
+    }
+}
+
+/// A prescribed body's fastest velocity: the constant one or the table's fastest sample
+/// (zero for a free body).
+pub fn fastest_prescribed_velocity(body: &crate::case::Body) -> Vec2 {
+    match &body.motion {
+        crate::case::Motion::Prescribed {
+            velocity, table, ..
+        } => table
+            .iter()
+            .flatten()
+            .map(|s| vec2(s.velocity))
+            .chain(std::iter::once(vec2(*velocity)))
+            .fold(
+                Vec2::zeros(),
+                |a, b| if b.norm() > a.norm() { b } else { a },
+            ),
+        crate::case::Motion::Free { .. } => Vec2::zeros(),
+    }
+}
+
+/// The smallest deadrise (rad) of the polygon's edges that face the unit direction `d`,
+/// the body placed at its angle; `None` when no edge faces it.
+pub fn leading_deadrise(body: &crate::case::Body, d: Vec2) -> Option<Real> {
     let points: Vec<Vec2> = body
         .polygon
         .iter()
@@ -252,10 +269,7 @@ pub fn jet_root_speed(body: &crate::case::Body, gravity: Vec2, fall: Real) -> Re
             (leading && t.norm() > 0.0).then(|| (t.dot(&d).abs() / t.norm()).asin())
         })
         .fold(Real::INFINITY, Real::min);
-    if !deadrise.is_finite() {
-        return 0.0;
-    }
-    std::f64::consts::PI * speed / (2.0 * deadrise.max(MIN_DEADRISE).tan())
+    deadrise.is_finite().then_some(deadrise)
 }
 
 /// Time step, domain and the guards that end or trim a run.

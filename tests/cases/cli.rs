@@ -447,3 +447,27 @@ fn check_reports_the_layout_of_each_spacing() {
     let stdout = text(&out.stdout);
     assert!(stdout.contains("layout: one spacing, 0.02 m"), "{stdout}");
 }
+
+#[test]
+fn check_advises_on_a_body_outside_the_validated_impact_envelope() {
+    let wedge = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("cases")
+        .join("wedge_30deg_constant_velocity.json");
+    let wedge = wedge.to_str().unwrap();
+    // the shipped wedge: 0.5 m across at 5 mm, 30°
+    let out = mpsfsi(&["check", wedge]);
+    assert!(out.status.success(), "{}", text(&out.stderr));
+    assert!(
+        !text(&out.stdout).contains("advice"),
+        "{}",
+        text(&out.stdout)
+    );
+    // the same at 2 cm: 25 spacings across
+    let out = mpsfsi(&["check", wedge, "--set", "particle_spacing=0.02"]);
+    let stdout = text(&out.stdout);
+    assert!(out.status.success(), "{}", text(&out.stderr));
+    assert!(
+        stdout.contains("advice: body wedge: 25 spacings across"),
+        "{stdout}"
+    );
+}
