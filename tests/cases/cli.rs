@@ -18,6 +18,15 @@ fn tiny() -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/cases/tiny.json")
 }
 
+/// The shipped default job's case.
+fn shipped_wedge() -> String {
+    Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("cases/wedge_30deg_constant_velocity.json")
+        .to_str()
+        .unwrap()
+        .to_string()
+}
+
 /// A fresh directory under the target's test scratch space.
 fn scratch(name: &str) -> PathBuf {
     let dir = Path::new(env!("CARGO_TARGET_TMPDIR")).join(format!("cases-cli-{name}"));
@@ -414,10 +423,8 @@ fn plot_draws_a_snapshot_of_a_run_and_refuses_what_it_cannot_draw() {
 
 #[test]
 fn check_reports_the_layout_of_each_spacing() {
-    let wedge = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
-        .join("cases")
-        .join("wedge_30deg_constant_velocity.json");
-    let wedge = wedge.to_str().unwrap();
+    let wedge = shipped_wedge();
+    let wedge = wedge.as_str();
     let case = load_case_file(
         std::path::Path::new(wedge),
         &["particle_spacing=0.02".into()],
@@ -450,10 +457,8 @@ fn check_reports_the_layout_of_each_spacing() {
 
 #[test]
 fn check_advises_on_a_body_outside_the_validated_impact_envelope() {
-    let wedge = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
-        .join("cases")
-        .join("wedge_30deg_constant_velocity.json");
-    let wedge = wedge.to_str().unwrap();
+    let wedge = shipped_wedge();
+    let wedge = wedge.as_str();
     // the shipped wedge: 0.5 m across at 5 mm, 30°
     let out = mpsfsi(&["check", wedge]);
     assert!(out.status.success(), "{}", text(&out.stderr));
