@@ -1,6 +1,6 @@
 //! Where the default scheme's slamming loads are validated (docs/validation.md), and the
 //! advice `mpsfsi check` and `mpsfsi run` print for a body that enters the water outside
-//! that envelope: a flat bottom, a small deadrise, or too few spacings across the body.
+//! that envelope: a flat face, a small deadrise, or too few spacings across the body.
 
 use crate::case::{Case, Motion};
 use crate::engine::config::{fastest_prescribed_velocity, leading_deadrise};
@@ -8,18 +8,18 @@ use crate::math::{perp, rotate, vec2, Real};
 
 /// Spacings across a body from which a 15–40° wedge reads C_F within 5 % (at 12–25 the
 /// quick bench's 30° wedges read 17–24 % high).
-pub const MIN_SPACINGS_ACROSS: Real = 100.0;
+const MIN_SPACINGS_ACROSS: Real = 100.0;
 
 /// Deadrise (degrees) below which the validated spacing doubles: the 10° wedge reads
 /// +8.2 % at 100 spacings across (four offsets) and −1.0 % at 200.
-pub const SMALL_DEADRISE_DEG: Real = 15.0;
+const SMALL_DEADRISE_DEG: Real = 15.0;
 
 /// Spacings across a body of small deadrise for 5 %.
-pub const SMALL_DEADRISE_SPACINGS: Real = 200.0;
+const SMALL_DEADRISE_SPACINGS: Real = 200.0;
 
-/// Deadrise (degrees) below which a bottom counts as flat: the default scheme carries an
+/// Deadrise (degrees) below which a face counts as flat: the default scheme carries an
 /// impulsively started flat plate's added mass 7–13 % high.
-pub const FLAT_DEG: Real = 5.0;
+const FLAT_DEG: Real = 5.0;
 
 /// One line of advice for every body that enters the water outside the validated
 /// envelope: a body with a velocity (prescribed, or a free body's initial one), judged
@@ -51,7 +51,7 @@ pub fn impact_advice(case: &Case) -> Vec<String> {
             let name = &body.name;
             if deadrise < FLAT_DEG {
                 Some(format!(
-                    "body {name}: its bottom is flat where it meets the water (deadrise {deadrise:.1}°): the default scheme reads a flat impact's added mass 7-13 % high; `scheme.projection = \"exact\"` carries it within 2.1 % over a short impact (docs/validation.md)"
+                    "body {name}: the face it leads with is flat (deadrise {deadrise:.1}°): the default scheme reads a flat impact's added mass 7-13 % high; `scheme.projection = \"exact\"` carries it within 2.1 % over a short impact (docs/validation.md)"
                 ))
             } else if deadrise < SMALL_DEADRISE_DEG && spacings < SMALL_DEADRISE_SPACINGS {
                 Some(format!(
@@ -119,7 +119,7 @@ mod tests {
     }
 
     #[test]
-    fn a_flat_bottom_and_a_body_at_rest() {
+    fn a_flat_face_and_a_body_at_rest() {
         let box_polygon = "[[-0.25, 0], [0.25, 0], [0.25, 0.2], [-0.25, 0.2]]";
         let advice = impact_advice(&case_with(box_polygon, DOWN, 0.005));
         assert!(advice[0].contains("flat"), "{}", advice[0]);
