@@ -103,6 +103,11 @@ pub struct Summary {
     pub n0: Real,
     pub scheme: Scheme,
     pub version: String,
+    /// One line for every body that enters the water outside the envelope where the
+    /// default scheme's slamming loads are validated (`analysis::envelope`); absent when
+    /// there is none.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub advice: Vec<String>,
 }
 
 #[derive(Debug, thiserror::Error)]
@@ -291,6 +296,7 @@ pub fn run_case(
         n0: sim.config.params.n0,
         scheme: sim.config.scheme.clone(),
         version: env!("CARGO_PKG_VERSION").to_string(),
+        advice: crate::analysis::envelope::impact_advice(case),
     };
     let json = serde_json::to_string_pretty(&summary).expect("summary serialises");
     std::fs::write(out_dir.join("summary.json"), json + "\n")?;

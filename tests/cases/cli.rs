@@ -475,4 +475,33 @@ fn check_advises_on_a_body_outside_the_validated_impact_envelope() {
         stdout.contains("advice: body wedge: 25 spacings across"),
         "{stdout}"
     );
+    // a run says it on stderr and keeps it in summary.json
+    let dir = scratch("advice");
+    let out = mpsfsi(&[
+        "run",
+        wedge,
+        "--out",
+        dir.to_str().unwrap(),
+        "--set",
+        "particle_spacing=0.02",
+        "--set",
+        "time.end=0.0005",
+    ]);
+    assert!(out.status.success(), "{}", text(&out.stderr));
+    assert!(
+        text(&out.stderr).contains("advice: body wedge: 25 spacings across"),
+        "{}",
+        text(&out.stderr)
+    );
+    let summary: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(dir.join("summary.json")).unwrap()).unwrap();
+    let advice = summary["advice"].as_array().expect("an advice array");
+    assert_eq!(advice.len(), 1, "{advice:?}");
+    assert!(
+        advice[0]
+            .as_str()
+            .unwrap()
+            .starts_with("body wedge: 25 spacings across"),
+        "{advice:?}"
+    );
 }
