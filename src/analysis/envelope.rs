@@ -2,8 +2,8 @@
 //! advice `mpsfsi check` and `mpsfsi run` print for a body that enters the water outside
 //! that envelope: a flat face, a small deadrise, or too few spacings across the body.
 
-use crate::case::{Case, Motion};
-use crate::engine::config::{fastest_prescribed_velocity, leading_deadrise};
+use crate::case::Case;
+use crate::engine::config::{given_velocity, leading_deadrise};
 use crate::math::{perp, rotate, vec2, Real};
 
 /// Spacings across a body from which a 15–40° wedge reads C_F within 5 % (at 12–25 the
@@ -30,10 +30,7 @@ pub fn impact_advice(case: &Case) -> Vec<String> {
     case.bodies
         .iter()
         .filter_map(|body| {
-            let velocity = match &body.motion {
-                Motion::Prescribed { .. } => fastest_prescribed_velocity(body),
-                Motion::Free { velocity, .. } => vec2(*velocity),
-            };
+            let velocity = given_velocity(body);
             if velocity.norm() <= 0.0 {
                 return None;
             }

@@ -213,14 +213,10 @@ const MIN_DEADRISE: Real = 5.0 * std::f64::consts::PI / 180.0;
 /// free-fall speed `fall` over the domain), β the smallest deadrise of the polygon's
 /// edges that face the motion (the direction of that velocity, or gravity's from rest).
 pub fn jet_root_speed(body: &crate::case::Body, gravity: Vec2, fall: Real) -> Real {
-    use crate::case::Motion;
+    let v = given_velocity(body);
     let (velocity, speed) = match &body.motion {
-        Motion::Prescribed { .. } => {
-            let fastest = fastest_prescribed_velocity(body);
-            (fastest, fastest.norm())
-        }
-        Motion::Free { velocity, .. } => {
-            let v = vec2(*velocity);
+        crate::case::Motion::Prescribed { .. } => (v, v.norm()),
+        crate::case::Motion::Free { .. } => {
             let heading = if v.norm() > 0.0 { v } else { gravity };
             (heading, v.norm() + fall)
         }
@@ -234,9 +230,9 @@ pub fn jet_root_speed(body: &crate::case::Body, gravity: Vec2, fall: Real) -> Re
     }
 }
 
-/// A prescribed body's fastest velocity: the constant one or the table's fastest sample
-/// (zero for a free body).
-pub fn fastest_prescribed_velocity(body: &crate::case::Body) -> Vec2 {
+/// The velocity the case gives a body: a prescribed body's fastest (the constant one or
+/// the table's fastest sample), a free body's initial one.
+pub fn given_velocity(body: &crate::case::Body) -> Vec2 {
     match &body.motion {
         crate::case::Motion::Prescribed {
             velocity, table, ..
@@ -249,7 +245,7 @@ pub fn fastest_prescribed_velocity(body: &crate::case::Body) -> Vec2 {
                 Vec2::zeros(),
                 |a, b| if b.norm() > a.norm() { b } else { a },
             ),
-        crate::case::Motion::Free { .. } => Vec2::zeros(),
+        crate::case::Motion::Free { velocity, .. } => vec2(*velocity),
     }
 }
 
