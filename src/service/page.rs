@@ -1,7 +1,7 @@
 //! The job page (`GET /v1/jobs/{id}` with `Accept: text/html`): one self-contained HTML
 //! document, no framework and nothing fetched from elsewhere, so it works offline. It
 //! shows the status and progress (reloading every few seconds while the job is not
-//! finished), the load plot and the flow pictures with a time slider, all drawn by the
+//! finished), the run's advice on a case outside the validated envelope, the load plot and the flow pictures with a time slider, all drawn by the
 //! service's own SVG routes.
 //!
 //! Each picture's `<img>` gets `data-rendered="yes"` once it has loaded with a non-zero
@@ -25,7 +25,8 @@ fn escape(s: &str) -> String {
 const STYLE: &str = "body{font-family:sans-serif;margin:1.5em;max-width:1300px;color:#222}\
 img{max-width:100%;border:1px solid #ddd}progress{width:30em}\
 table{border-collapse:collapse}td{padding:2px 12px 2px 0}\
-pre{background:#f6f6f6;padding:8px;overflow:auto;max-height:20em}";
+pre{background:#f6f6f6;padding:8px;overflow:auto;max-height:20em}\
+#advice{background:#fff6d5;padding:6px 6px 6px 24px}";
 
 const SCRIPT: &str = r#"
 function watch(img) {
@@ -78,6 +79,17 @@ pub fn job_page(row: &JobRow, json: &Value, snapshot_times: &[f64]) -> String {
             .map(|r| format!(" ({})", escape(r)))
             .unwrap_or_default()
     );
+    let advice: Vec<&str> = json["summary"]["advice"]
+        .as_array()
+        .map(|lines| lines.iter().filter_map(Value::as_str).collect())
+        .unwrap_or_default();
+    if !advice.is_empty() {
+        html.push_str("<ul id=\"advice\">");
+        for line in advice {
+            let _ = write!(html, "<li>{}</li>", escape(line));
+        }
+        html.push_str("</ul>\n");
+    }
     let _ = writeln!(
         html,
         "<p><progress value=\"{fraction:.4}\" max=\"1\"></progress> {:.1} %: t = {:.4} ms of {:.4} ms, step {}</p>",

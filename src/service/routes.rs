@@ -5,6 +5,7 @@ use super::error::ApiError;
 use super::series::{self, SeriesFile};
 use super::store::{Admission, JobRow, JobStatus};
 use super::workers::Jobs;
+use crate::analysis::envelope::impact_advice;
 use crate::case::{parse_case_value, validate};
 use crate::output::flow::{
     flow_svg, parse_window, read_snapshot, snapshot_times, title, FlowField, SnapshotError,
@@ -227,10 +228,17 @@ async fn submit_job(
             state.jobs.job_queued();
             tracing::info!(%id, name = %case.name, "job queued");
             let location = format!("/v1/jobs/{id}");
+            // what `mpsfsi check` would advise, told at once rather than only in the
+            // summary at the end of the run
+            let mut body = job_json(&row);
+            let advice = impact_advice(&case);
+            if !advice.is_empty() {
+                body["advice"] = json!(advice);
+            }
             Ok((
                 StatusCode::CREATED,
                 [(header::LOCATION, location)],
-                Json(job_json(&row)),
+                Json(body),
             )
                 .into_response())
         }

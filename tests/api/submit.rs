@@ -223,3 +223,51 @@ async fn a_job_without_snapshots_answers_404_for_its_flow_picture() {
     assert_conforms("GET", "/v1/jobs/{id}/snapshot.svg", 404, &body);
     app.stop().await;
 }
+
+/// A case outside the validated impact envelope (the shipped wedge at 2 cm: 25 spacings
+/// across) is told so in the response to its submission, and its job page lists the
+/// summary's advice once it has run; a case within it gets no `advice` field.
+#[tokio::test]
+async fn the_submission_and_the_job_page_carry_the_envelope_advice() {
+    let app = spawn_app("advice", |_| {}).await;
+    let text = std::fs::read_to_string(concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/cases/wedge_30deg_constant_velocity.json"
+    ))
+    .unwrap();
+    let mut coarse: Value = serde_json::from_str(&text).unwrap();
+    coarse["particle_spacing"] = serde_json::json!(0.02);
+    coarse["time"]["end"] = serde_json::json!(0.0005);
+    let r = app.post_case(&coarse).await;
+    assert_eq!(r.status().as_u16(), 201);
+    let body: Value = r.json().await.unwrap();
+    assert_conforms("POST", "/v1/jobs", 201, &body);
+    let advice = body["advice"].as_array().expect("an advice array");
+    assert_eq!(advice.len(), 1, "{advice:?}");
+    let line = advice[0].as_str().unwrap();
+    assert!(line.contains("25 spacings across"), "{line}");
+    let id = body["id"].as_str().unwrap().to_string();
+    let job = app.wait_finished(&id).await;
+    assert_eq!(job["status"], "succeeded", "{job}");
+    assert_eq!(job["summary"]["advice"][0].as_str(), Some(line));
+    let page = app
+        .client
+        .get(app.url(&format!("/v1/jobs/{id}")))
+        .header("accept", "text/html")
+        .send()
+        .await
+        .unwrap()
+        .text()
+        .await
+        .unwrap();
+    let list = page
+        .split("<ul id=\"advice\">")
+        .nth(1)
+        .expect("an advice list on the page");
+    assert!(list.contains("25 spacings across"), "{list}");
+
+    let r = app.post_case(&tiny_case(0.002)).await;
+    let body: Value = r.json().await.unwrap();
+    assert!(body.get("advice").is_none(), "{body}");
+    app.stop().await;
+}
