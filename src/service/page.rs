@@ -1,8 +1,9 @@
 //! The job page (`GET /v1/jobs/{id}` with `Accept: text/html`): one self-contained HTML
 //! document, no framework and nothing fetched from elsewhere, so it works offline. It
 //! shows the status and progress (reloading every few seconds while the job is not
-//! finished), the run's advice on a case outside the validated envelope, the load plot and the flow pictures with a time slider, all drawn by the
-//! service's own SVG routes.
+//! finished), the summary's advice on a case outside the validated envelope, the load
+//! plot and the flow pictures with a time slider, all drawn by the service's own SVG
+//! routes.
 //!
 //! Each picture's `<img>` gets `data-rendered="yes"` once it has loaded with a non-zero
 //! size (`"no"` on an error), which is what the browser test reads.
