@@ -227,11 +227,18 @@ fn user_wedge_25_degrees_with_defaults() {
 /// (B/l0 = 100) with `mass` kg/m: the mean relative error of its velocity loss against
 /// the momentum model over 0.6-0.9 t_chine, and the worst sample.
 fn free_fall_error(mass: f64) -> (f64, f64) {
+    free_fall_error_at(mass, 0.0)
+}
+
+/// [`free_fall_error`] with the wedge's axis `offset` spacings off the case's.
+fn free_fall_error_at(mass: f64, offset: f64) -> (f64, f64) {
     let path = case_path("wedge_free_fall.json");
     let mut case: serde_json::Value =
         serde_json::from_str(&std::fs::read_to_string(path).unwrap()).unwrap();
     case["bodies"][0]["motion"]["mass"] = mass.into();
-    case["name"] = format!("free-fall-{mass}").into();
+    case["name"] = format!("free-fall-{mass}-{offset:.3}").into();
+    let l0 = case["particle_spacing"].as_f64().unwrap();
+    case["bodies"][0]["position"][0] = (offset * l0).into();
     // the model's window ends at 0.9 t_chine = 13.4 ms
     case["time"]["end"] = 0.0135.into();
     let text = case.to_string();
@@ -278,12 +285,27 @@ fn shipped_free_fall_wedge_at_its_spacing() {
 /// reaches the body's own at the chine (h = 0.092 m), Wagner's rho pi c²/2 (98 kg/m
 /// there) 1.6 times it. The deceleration's added mass is where the reference models
 /// part: the modified Logvinovich model scaled to the similarity force puts this body's
-/// velocity loss 4.2 % below the momentum model's (the shipped mass 2.1 %), and the run
-/// reads -0.7 % against it.
+/// velocity loss 4.2 % below the momentum model's (the shipped mass 2.1 %), and the case's
+/// own run reads -0.7 % against it. Read over the four axis offsets of the impact ensembles
+/// (1/8 to 1/4 l0): one run reads 2.6 points apart from another across them, and moves by
+/// 0.1 points with the round-off of a reordered sum, which the mean of four does not.
 #[test]
-#[ignore = "50 s on two cores; passes by 0.1 points against the momentum model: mean -4.9 %, worst -6.2 %"]
+#[ignore = "90 s on two cores; passes: mean -4.3 % over the offsets (-5.1 / -4.6 / -4.9 / -2.6 %), worst -6.8 %"]
 fn light_free_fall_wedge_at_its_spacing() {
-    let (mean, worst) = free_fall_error(60.25);
+    let runs: Vec<(f64, f64)> = [1.0 / 8.0, 1.0 / 6.0, 5.0 / 24.0, 1.0 / 4.0]
+        .iter()
+        .map(|&d| free_fall_error_at(60.25, d))
+        .collect();
+    let mean = runs.iter().map(|r| r.0).sum::<f64>() / runs.len() as f64;
+    let worst = runs
+        .iter()
+        .map(|r| r.1)
+        .fold(0.0_f64, |w, e| if e.abs() > w.abs() { e } else { w });
+    println!(
+        "free fall 60.25 kg/m over four offsets: mean {:+.2} %, worst {:+.2} %",
+        100.0 * mean,
+        100.0 * worst
+    );
     assert!(
         mean.abs() < 0.05 && worst.abs() < 0.10,
         "mean {mean:+.3}, worst {worst:+.3}"
