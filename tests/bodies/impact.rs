@@ -230,6 +230,11 @@ fn free_fall_error(mass: f64) -> (f64, f64) {
     free_fall_error_at(mass, 0.0)
 }
 
+/// The value of largest magnitude, with its sign (0 for none).
+fn largest_in_magnitude(values: impl Iterator<Item = f64>) -> f64 {
+    values.fold(0.0, |w, e| if e.abs() > w.abs() { e } else { w })
+}
+
 /// [`free_fall_error`] with the wedge's axis `offset` spacings off the case's.
 fn free_fall_error_at(mass: f64, offset: f64) -> (f64, f64) {
     let path = case_path("wedge_free_fall.json");
@@ -251,10 +256,7 @@ fn free_fall_error_at(mass: f64, offset: f64) -> (f64, f64) {
         100.0 * measure::mean_error(&other)
     );
     let mean = measure::mean_error(&errors);
-    let worst = errors
-        .iter()
-        .map(|e| e.1)
-        .fold(0.0_f64, |w, e| if e.abs() > w.abs() { e } else { w });
+    let worst = largest_in_magnitude(errors.iter().map(|e| e.1));
     println!(
         "free fall {mass} kg/m: velocity loss against the momentum model {:+.2} % on average, worst {:+.2} % ({} samples); {} steps ({} repeated), {} runaways, {:.0} s",
         100.0 * mean,
@@ -297,10 +299,7 @@ fn light_free_fall_wedge_at_its_spacing() {
         .map(|&d| free_fall_error_at(60.25, d))
         .collect();
     let mean = runs.iter().map(|r| r.0).sum::<f64>() / runs.len() as f64;
-    let worst = runs
-        .iter()
-        .map(|r| r.1)
-        .fold(0.0_f64, |w, e| if e.abs() > w.abs() { e } else { w });
+    let worst = largest_in_magnitude(runs.iter().map(|r| r.1));
     println!(
         "free fall 60.25 kg/m over four offsets: mean {:+.2} %, worst {:+.2} %",
         100.0 * mean,
