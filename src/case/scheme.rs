@@ -236,6 +236,8 @@ pub struct Scheme {
     /// rebuilt every step). In between, the hierarchy of an earlier step is fitted to
     /// the new matrix (engine::pressure::reuse); it is rebuilt sooner when the
     /// iterations grow by half. The solution keeps the solver tolerance either way.
+    /// The default 20: on the 30° wedge at 5 mm it takes half the builds of 10 for 14.6
+    /// iterations a step against 14.8 (40: 14.8).
     #[schemars(range(min = 1))]
     pub amg_rebuild_interval: usize,
     /// Influence radius r_e/l0 of PND, gradient and source. 2.5: the slamming force
@@ -363,7 +365,7 @@ impl Default for Scheme {
             solver: SolverKind::default(),
             solver_tolerance: 1.0e-8,
             solver_max_iterations: 2000,
-            amg_rebuild_interval: 10,
+            amg_rebuild_interval: 20,
             radius: 2.5,
             laplacian_radius: None,
             surface_threshold: 0.97,

@@ -28,10 +28,9 @@ pub fn number_density_and_divergence<K: Kernel>(
         let r = x[j] - x[i];
         let d = r.norm();
         let (re, v) = cloud.pair(i, j);
-        n += K::w(d, re) * v;
-        if d > 0.0 && d < re {
-            s += K::dw(d, re) * r.dot(&(u[j] - u[i])) / d * v;
-        }
+        let (w, dw_r) = K::w_and_dw_over_r(d, re);
+        n += w * v;
+        s += dw_r * r.dot(&(u[j] - u[i])) * v;
     }
     (n, -c * s)
 }

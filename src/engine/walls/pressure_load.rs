@@ -110,7 +110,6 @@ pub fn pressure_loads(
     l0: Real,
     re: Real,
 ) -> Vec<(Vec2, Real)> {
-    debug_assert!(grid.cell_size >= re);
     let floor = FLOOR_SHARE * full_side_weight(w, l0, re);
     let reach = (re * scales.range().1 / grid.cell_size).ceil() as isize;
     walls
