@@ -1,7 +1,7 @@
 //! The job page (`GET /v1/jobs/{id}` with `Accept: text/html`): one self-contained HTML
 //! document, no framework and nothing fetched from elsewhere, so it works offline. It
 //! shows the status and progress (reloading every few seconds while the job is not
-//! finished), the summary's advice on a case outside the validated envelope, the load
+//! finished), the advice on a case outside the validated envelope (from submission on), the load
 //! plot and the flow pictures with a time slider, all drawn by the service's own SVG
 //! routes.
 //!
@@ -54,9 +54,9 @@ if (flow) {
 }
 "#;
 
-/// The page of job `row` (`json`: its record as the API serves it; `snapshot_times`:
-/// the snapshots written so far).
-pub fn job_page(row: &JobRow, json: &Value, snapshot_times: &[f64]) -> String {
+/// The page of job `row` (`json`: its record as the API serves it; `advice`: what
+/// `mpsfsi check` advises its case; `snapshot_times`: the snapshots written so far).
+pub fn job_page(row: &JobRow, json: &Value, advice: &[String], snapshot_times: &[f64]) -> String {
     let base = format!("/v1/jobs/{}", row.id);
     let name = escape(&row.name);
     let status = row.status.as_str();
@@ -80,10 +80,6 @@ pub fn job_page(row: &JobRow, json: &Value, snapshot_times: &[f64]) -> String {
             .map(|r| format!(" ({})", escape(r)))
             .unwrap_or_default()
     );
-    let advice: Vec<&str> = json["summary"]["advice"]
-        .as_array()
-        .map(|lines| lines.iter().filter_map(Value::as_str).collect())
-        .unwrap_or_default();
     if !advice.is_empty() {
         html.push_str("<ul id=\"advice\">");
         for line in advice {

@@ -6,7 +6,7 @@ use super::series::{self, SeriesFile};
 use super::store::{Admission, JobRow, JobStatus};
 use super::workers::Jobs;
 use crate::analysis::envelope::impact_advice;
-use crate::case::{parse_case_value, validate};
+use crate::case::{parse_case_str, parse_case_value, validate};
 use crate::output::flow::{
     flow_svg, parse_window, read_snapshot, snapshot_times, title, FlowField, SnapshotError,
 };
@@ -321,7 +321,15 @@ async fn get_job(
             .await
             .map_err(ApiError::internal)?
             .map_err(ApiError::internal)?;
-        let html = super::page::job_page(&row, &job_json(&row), &times);
+        // the advice `mpsfsi check` gives the case, on the page from submission on (the
+        // summary carries it only once the run ends)
+        let advice = match state.jobs.store.case_text(row.id).await? {
+            Some(text) => parse_case_str(&text)
+                .map(|case| impact_advice(&case))
+                .unwrap_or_default(),
+            None => Vec::new(),
+        };
+        let html = super::page::job_page(&row, &job_json(&row), &advice, &times);
         return Ok(([(header::CONTENT_TYPE, "text/html; charset=utf-8")], html).into_response());
     }
     Ok(Json(job_json(&row)).into_response())

@@ -149,6 +149,19 @@ impl Api {
         body
     }
 
+    /// The job page, as a browser asks for it.
+    pub async fn page(&self, id: &str) -> String {
+        let r = self
+            .client
+            .get(self.url(&format!("/v1/jobs/{id}")))
+            .header("accept", "text/html")
+            .send()
+            .await
+            .expect("request sent");
+        assert_eq!(r.status().as_u16(), 200);
+        r.text().await.unwrap()
+    }
+
     /// Submit and return the job id (asserting 201).
     pub async fn submit(&self, case: &Value) -> String {
         let r = self.post_case(case).await;

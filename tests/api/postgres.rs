@@ -127,6 +127,34 @@ async fn a_job_submitted_to_one_node_is_served_by_another_while_it_runs_and_afte
 }
 
 #[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn a_queued_job_s_page_on_another_node_carries_its_advice() {
+    let Some(pg) = PgServer::start_or_skip("page_advice").await else {
+        return;
+    };
+    let url = pg.fresh_database().await;
+    let a = node(&url, "pg-advice-a").await;
+    let b = node(&url, "pg-advice-b").await;
+    // the shipped wedge at 2 cm: 25 spacings across its breadth, advised; no worker runs it
+    let text = std::fs::read_to_string(concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/cases/wedge_30deg_constant_velocity.json"
+    ))
+    .unwrap();
+    let mut coarse: Value = serde_json::from_str(&text).unwrap();
+    coarse["particle_spacing"] = serde_json::json!(0.02);
+    let id = a.submit(&coarse).await;
+    assert_eq!(b.job(&id).await["status"], "queued");
+    let page = b.page(&id).await;
+    let list = page
+        .split("<ul id=\"advice\">")
+        .nth(1)
+        .expect("an advice list on the page");
+    assert!(list.contains("25 spacings across"), "{list}");
+    a.stop().await;
+    b.stop().await;
+}
+
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
 async fn a_worker_killed_mid_job_loses_it_to_another_and_the_job_succeeds_once() {
     let Some(pg) = PgServer::start_or_skip("killed_worker").await else {
         return;

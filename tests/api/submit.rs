@@ -1,7 +1,7 @@
 //! The happy path: submit a real case, poll to `succeeded`, and check that the service
 //! serves exactly what `run_case` writes for the same case (nothing added, nothing lost).
 
-use crate::helpers::{fresh_data_dir, spawn_app, tiny_case};
+use crate::helpers::{fresh_data_dir, long_case, spawn_app, tiny_case};
 use crate::schema::assert_conforms;
 use mpsfsi::case::{parse_case_value, Limits, ValidCase};
 use mpsfsi::run::{run_case, Quiet};
@@ -229,7 +229,10 @@ async fn a_job_without_snapshots_answers_404_for_its_flow_picture() {
 /// summary's advice once it has run; a case within it gets no `advice` field.
 #[tokio::test]
 async fn the_submission_and_the_job_page_carry_the_envelope_advice() {
-    let app = spawn_app("advice", |_| {}).await;
+    // one worker, kept busy, so that the advised job waits in the queue
+    let app = spawn_app("advice", |c| c.workers = 1).await;
+    let busy = app.submit(&long_case()).await;
+    app.wait_running(&busy).await;
     let text = std::fs::read_to_string(concat!(
         env!("CARGO_MANIFEST_DIR"),
         "/cases/wedge_30deg_constant_velocity.json"
@@ -247,27 +250,39 @@ async fn the_submission_and_the_job_page_carry_the_envelope_advice() {
     let line = advice[0].as_str().unwrap();
     assert!(line.contains("25 spacings across"), "{line}");
     let id = body["id"].as_str().unwrap().to_string();
+    let advice_on_page = |page: String| -> String {
+        page.split("<ul id=\"advice\">")
+            .nth(1)
+            .expect("an advice list on the page")
+            .split("</ul>")
+            .next()
+            .unwrap()
+            .to_string()
+    };
+    // queued: the page advises before the run has a summary
+    assert_eq!(app.job(&id).await["status"], "queued");
+    let list = advice_on_page(app.page(&id).await);
+    assert!(list.contains("25 spacings across"), "{list}");
+
+    let r = app
+        .client
+        .post(app.url(&format!("/v1/jobs/{busy}/cancel")))
+        .send()
+        .await
+        .unwrap();
+    assert!(r.status().is_success(), "{}", r.status());
     let job = app.wait_finished(&id).await;
     assert_eq!(job["status"], "succeeded", "{job}");
     assert_eq!(job["summary"]["advice"][0].as_str(), Some(line));
-    let page = app
-        .client
-        .get(app.url(&format!("/v1/jobs/{id}")))
-        .header("accept", "text/html")
-        .send()
-        .await
-        .unwrap()
-        .text()
-        .await
-        .unwrap();
-    let list = page
-        .split("<ul id=\"advice\">")
-        .nth(1)
-        .expect("an advice list on the page");
+    let list = advice_on_page(app.page(&id).await);
     assert!(list.contains("25 spacings across"), "{list}");
 
+    // a case inside the envelope gets none, in the response or on its page
     let r = app.post_case(&tiny_case(0.002)).await;
     let body: Value = r.json().await.unwrap();
     assert!(body.get("advice").is_none(), "{body}");
+    let quiet = body["id"].as_str().unwrap().to_string();
+    app.wait_finished(&quiet).await;
+    assert!(!app.page(&quiet).await.contains("id=\"advice\""));
     app.stop().await;
 }

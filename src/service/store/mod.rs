@@ -93,6 +93,11 @@ impl JobStore {
         either!(self, s => s.get(id).await)
     }
 
+    /// The case text job `id` was submitted with.
+    pub async fn case_text(&self, id: Uuid) -> Result<Option<String>, sqlx::Error> {
+        either!(self, s => s.case_text(id).await)
+    }
+
     /// Newest first, with the total matching `status`.
     pub async fn list(
         &self,

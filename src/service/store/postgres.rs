@@ -172,6 +172,14 @@ impl PgStore {
         raw.map(RawJob::into_row).transpose()
     }
 
+    pub async fn case_text(&self, id: Uuid) -> Result<Option<String>, sqlx::Error> {
+        let row: Option<(String,)> = sqlx::query_as("SELECT case_json FROM jobs WHERE id = $1")
+            .bind(id.to_string())
+            .fetch_optional(&self.pool)
+            .await?;
+        Ok(row.map(|(text,)| text))
+    }
+
     pub async fn list(
         &self,
         status: Option<JobStatus>,

@@ -111,6 +111,14 @@ impl SqliteStore {
         self.get_text(&id.to_string()).await
     }
 
+    pub async fn case_text(&self, id: Uuid) -> Result<Option<String>, sqlx::Error> {
+        let row: Option<(String,)> = sqlx::query_as("SELECT case_json FROM jobs WHERE id = ?")
+            .bind(id.to_string())
+            .fetch_optional(&self.pool)
+            .await?;
+        Ok(row.map(|(text,)| text))
+    }
+
     pub async fn list(
         &self,
         status: Option<JobStatus>,
