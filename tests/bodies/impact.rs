@@ -173,7 +173,7 @@ fn user_wedge_15_degrees_with_defaults() {
 
 /// 30° deadrise, the shipped wedge's geometry in the user tank: similarity C_F = 14.04.
 #[test]
-#[ignore = "90 s on two cores; passes: -0.6 % (t0 0.28 ms, per-step scatter 0.28)"]
+#[ignore = "90 s on two cores; passes: +1.7 % (t0 0.28 ms, per-step scatter 0.31)"]
 fn user_wedge_30_degrees_with_defaults() {
     let err = wedge_error(30.0, 14.04);
     assert!(err.abs() < 0.05, "{:+.1} %", 100.0 * err);
@@ -181,7 +181,7 @@ fn user_wedge_30_degrees_with_defaults() {
 
 /// 40° deadrise: similarity C_F = 5.45.
 #[test]
-#[ignore = "80 s on two cores; passes: -0.6 % (t0 0.29 ms, per-step scatter 0.37)"]
+#[ignore = "80 s on two cores; passes: -0.7 % (t0 0.29 ms, per-step scatter 0.37)"]
 fn user_wedge_40_degrees_with_defaults() {
     let err = wedge_error(40.0, 5.45);
     assert!(err.abs() < 0.05, "{:+.1} %", 100.0 * err);
@@ -209,7 +209,7 @@ fn user_wedge_10_degrees_with_defaults() {
 /// bias of the onset reading +2.9 % instead of +5.8 %) and the jet root twice as well
 /// resolved.
 #[test]
-#[ignore = "7 minutes on two cores; passes: -1.0 % on the axis (t0 0.081 ms)"]
+#[ignore = "7 minutes on two cores; passes: -0.4 % on the axis (t0 0.081 ms)"]
 fn user_wedge_10_degrees_at_twice_the_resolution() {
     let err = wedge_error_at(10.0, 211.7, 0.0025);
     assert!(err.abs() < 0.05, "{:+.1} %", 100.0 * err);
@@ -217,7 +217,7 @@ fn user_wedge_10_degrees_at_twice_the_resolution() {
 
 /// 25° deadrise: similarity C_F = 23.61.
 #[test]
-#[ignore = "85 s on two cores, kept out of CI for time; passes: -1.6 % (t0 0.16 ms, per-step scatter 0.35)"]
+#[ignore = "85 s on two cores, kept out of CI for time; passes: -1.8 % (t0 0.16 ms, per-step scatter 0.35)"]
 fn user_wedge_25_degrees_with_defaults() {
     let err = wedge_error(25.0, 23.61);
     assert!(err.abs() < 0.05, "{:+.1} %", 100.0 * err);
@@ -296,7 +296,7 @@ fn shipped_free_fall_wedge_at_its_spacing() {
 /// (1/8 to 1/4 l0): one run reads 2.6 points apart from another across them, and moves by
 /// 0.1 points with the round-off of a reordered sum, which the mean of four does not.
 #[test]
-#[ignore = "90 s on two cores; passes: mean -4.3 % over the offsets (-5.1 / -4.6 / -4.9 / -2.6 %), worst -6.8 %"]
+#[ignore = "90 s on two cores; passes: mean -4.3 % over the offsets (-5.1 / -4.6 / -4.9 / -2.6 %), worst -6.9 %"]
 fn light_free_fall_wedge_at_its_spacing() {
     let runs: Vec<(f64, f64)> = AXIS_OFFSETS
         .iter()
@@ -370,7 +370,7 @@ fn the_default_cfl_reads_as_half_of_it_at_1_cm() {
 }
 
 #[test]
-#[ignore = "9 minutes on two cores; passes: C_F 13.71 ± 0.10 at CFL 0.2 against 13.67 ± 0.08 at 0.1, 0.3 standard errors apart"]
+#[ignore = "9 minutes on two cores; passes: C_F 13.71 ± 0.09 at CFL 0.2 against 13.69 ± 0.08 at 0.1, 0.1 standard errors apart"]
 fn the_default_cfl_reads_as_half_of_it_at_5_mm() {
     cfl_reads_as_half_the_cfl(0.005);
 }
