@@ -236,8 +236,9 @@ pub struct Scheme {
     /// rebuilt every step). In between, the hierarchy of an earlier step is fitted to
     /// the new matrix (engine::pressure::reuse); it is rebuilt sooner when the
     /// iterations grow by half. The solution keeps the solver tolerance either way.
-    /// The default 20: on the 30° wedge at 5 mm it takes half the builds of 10 for 14.6
-    /// iterations a step against 14.8 (40: 14.8).
+    /// The default 20: the scaling bench's still tank builds half as often as at 10 (its
+    /// solve 50 → 40 ms a step at 160k particles), and the 30° wedge at 5 mm takes 14.6
+    /// iterations a step against 14.8 at 10 and at 40.
     #[schemars(range(min = 1))]
     pub amg_rebuild_interval: usize,
     /// Influence radius r_e/l0 of PND, gradient and source. 2.5: the slamming force

@@ -226,6 +226,30 @@ pub fn tiny_case(end: f64) -> Value {
     })
 }
 
+/// The shipped wedge at 2 cm: 25 spacings across its breadth, outside the validated
+/// envelope, so its submission and page carry advice ("25 spacings across").
+pub fn advised_wedge() -> Value {
+    let text = std::fs::read_to_string(concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/cases/wedge_30deg_constant_velocity.json"
+    ))
+    .unwrap();
+    let mut case: Value = serde_json::from_str(&text).unwrap();
+    case["particle_spacing"] = json!(0.02);
+    case
+}
+
+/// The advice list of a job page (the text inside `<ul id="advice">`); panics when the
+/// page has none.
+pub fn advice_on_page(page: &str) -> &str {
+    page.split("<ul id=\"advice\">")
+        .nth(1)
+        .expect("an advice list on the page")
+        .split("</ul>")
+        .next()
+        .unwrap()
+}
+
 /// A job that runs far longer than any test waits (to be cancelled or killed).
 pub fn long_case() -> Value {
     let mut case = tiny_case(100.0);

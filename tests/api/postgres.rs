@@ -2,7 +2,9 @@
 //! nodes are in-process with `--workers 0`, workers are `mpsfsi worker` processes, each
 //! test has its own throwaway server ([`PgServer`]).
 
-use crate::helpers::{fresh_data_dir, long_case, spawn_app, tiny_case, Api, TestApp};
+use crate::helpers::{
+    advice_on_page, advised_wedge, fresh_data_dir, long_case, spawn_app, tiny_case, Api, TestApp,
+};
 use crate::pg_server::PgServer;
 use mpsfsi::service::store::{Claimant, JobStatus, JobStore, ATTEMPTS_EXHAUSTED};
 use mpsfsi::service::DatabaseUrl;
@@ -134,21 +136,11 @@ async fn a_queued_job_s_page_on_another_node_carries_its_advice() {
     let url = pg.fresh_database().await;
     let a = node(&url, "pg-advice-a").await;
     let b = node(&url, "pg-advice-b").await;
-    // the shipped wedge at 2 cm: 25 spacings across its breadth, advised; no worker runs it
-    let text = std::fs::read_to_string(concat!(
-        env!("CARGO_MANIFEST_DIR"),
-        "/cases/wedge_30deg_constant_velocity.json"
-    ))
-    .unwrap();
-    let mut coarse: Value = serde_json::from_str(&text).unwrap();
-    coarse["particle_spacing"] = serde_json::json!(0.02);
-    let id = a.submit(&coarse).await;
+    // advised, and no worker runs it
+    let id = a.submit(&advised_wedge()).await;
     assert_eq!(b.job(&id).await["status"], "queued");
     let page = b.page(&id).await;
-    let list = page
-        .split("<ul id=\"advice\">")
-        .nth(1)
-        .expect("an advice list on the page");
+    let list = advice_on_page(&page);
     assert!(list.contains("25 spacings across"), "{list}");
     a.stop().await;
     b.stop().await;

@@ -1,7 +1,9 @@
 //! The happy path: submit a real case, poll to `succeeded`, and check that the service
 //! serves exactly what `run_case` writes for the same case (nothing added, nothing lost).
 
-use crate::helpers::{fresh_data_dir, long_case, spawn_app, tiny_case};
+use crate::helpers::{
+    advice_on_page, advised_wedge, fresh_data_dir, long_case, spawn_app, tiny_case,
+};
 use crate::schema::assert_conforms;
 use mpsfsi::case::{parse_case_value, Limits, ValidCase};
 use mpsfsi::run::{run_case, Quiet};
@@ -226,20 +228,15 @@ async fn a_job_without_snapshots_answers_404_for_its_flow_picture() {
 
 /// A case outside the validated impact envelope (the shipped wedge at 2 cm: 25 spacings
 /// across) is told so in the response to its submission, and its job page lists the
-/// summary's advice once it has run; a case within it gets no `advice` field.
+/// advice while the job waits in the queue and after it has run; a case within it gets
+/// no `advice` field and no list.
 #[tokio::test]
 async fn the_submission_and_the_job_page_carry_the_envelope_advice() {
     // one worker, kept busy, so that the advised job waits in the queue
     let app = spawn_app("advice", |c| c.workers = 1).await;
     let busy = app.submit(&long_case()).await;
     app.wait_running(&busy).await;
-    let text = std::fs::read_to_string(concat!(
-        env!("CARGO_MANIFEST_DIR"),
-        "/cases/wedge_30deg_constant_velocity.json"
-    ))
-    .unwrap();
-    let mut coarse: Value = serde_json::from_str(&text).unwrap();
-    coarse["particle_spacing"] = serde_json::json!(0.02);
+    let mut coarse = advised_wedge();
     coarse["time"]["end"] = serde_json::json!(0.0005);
     let r = app.post_case(&coarse).await;
     assert_eq!(r.status().as_u16(), 201);
@@ -250,18 +247,10 @@ async fn the_submission_and_the_job_page_carry_the_envelope_advice() {
     let line = advice[0].as_str().unwrap();
     assert!(line.contains("25 spacings across"), "{line}");
     let id = body["id"].as_str().unwrap().to_string();
-    let advice_on_page = |page: String| -> String {
-        page.split("<ul id=\"advice\">")
-            .nth(1)
-            .expect("an advice list on the page")
-            .split("</ul>")
-            .next()
-            .unwrap()
-            .to_string()
-    };
     // queued: the page advises before the run has a summary
     assert_eq!(app.job(&id).await["status"], "queued");
-    let list = advice_on_page(app.page(&id).await);
+    let page = app.page(&id).await;
+    let list = advice_on_page(&page);
     assert!(list.contains("25 spacings across"), "{list}");
 
     let r = app
@@ -274,7 +263,8 @@ async fn the_submission_and_the_job_page_carry_the_envelope_advice() {
     let job = app.wait_finished(&id).await;
     assert_eq!(job["status"], "succeeded", "{job}");
     assert_eq!(job["summary"]["advice"][0].as_str(), Some(line));
-    let list = advice_on_page(app.page(&id).await);
+    let page = app.page(&id).await;
+    let list = advice_on_page(&page);
     assert!(list.contains("25 spacings across"), "{list}");
 
     // a case inside the envelope gets none, in the response or on its page
