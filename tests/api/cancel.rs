@@ -1,28 +1,8 @@
 //! Cancellation of running and queued jobs, and the bounded queue.
 
-use crate::helpers::{long_case, spawn_app, tiny_case, TestApp};
+use crate::helpers::{cancel_running, long_case, spawn_app, tiny_case};
 use crate::schema::assert_conforms;
 use serde_json::Value;
-
-/// Cancel a running job (POST /v1/jobs/{id}/cancel): 202 while the run is still
-/// stopping, or 200 with status `cancelled` when it stopped between the request and the
-/// handler's re-read (a step of the test tank is well under a millisecond; both tests
-/// below met that race in full suite runs). Either answer conforms to the API description.
-async fn cancel_running(app: &TestApp, id: &str) {
-    let r = app
-        .client
-        .post(app.url(&format!("/v1/jobs/{id}/cancel")))
-        .send()
-        .await
-        .unwrap();
-    let code = r.status().as_u16();
-    let body: Value = r.json().await.unwrap();
-    assert!(
-        code == 202 || (code == 200 && body["status"] == "cancelled"),
-        "{code}: {body:#}"
-    );
-    assert_conforms("POST", "/v1/jobs/{id}/cancel", code, &body);
-}
 
 #[tokio::test(flavor = "multi_thread", worker_threads = 2)]
 async fn cancelling_a_running_job_stops_it_and_keeps_its_files() {

@@ -1,5 +1,6 @@
 //! `spawn_app`, tiny cases and request helpers.
 
+use crate::schema::assert_conforms;
 use mpsfsi::service::{App, Config, ServeError, ShutdownHandle};
 use serde_json::{json, Value};
 use std::path::PathBuf;
@@ -248,6 +249,26 @@ pub fn advice_on_page(page: &str) -> &str {
         .split("</ul>")
         .next()
         .unwrap()
+}
+
+/// Cancel a running job (POST /v1/jobs/{id}/cancel): 202 while the run is still
+/// stopping, or 200 with status `cancelled` when it stopped between the request and the
+/// handler's re-read (a step of the test tank is well under a millisecond; the cancel
+/// tests met that race in full suite runs). Either answer conforms to the API description.
+pub async fn cancel_running(app: &TestApp, id: &str) {
+    let r = app
+        .client
+        .post(app.url(&format!("/v1/jobs/{id}/cancel")))
+        .send()
+        .await
+        .unwrap();
+    let code = r.status().as_u16();
+    let body: Value = r.json().await.unwrap();
+    assert!(
+        code == 202 || (code == 200 && body["status"] == "cancelled"),
+        "{code}: {body:#}"
+    );
+    assert_conforms("POST", "/v1/jobs/{id}/cancel", code, &body);
 }
 
 /// A job that runs far longer than any test waits (to be cancelled or killed).

@@ -2,7 +2,7 @@
 //! serves exactly what `run_case` writes for the same case (nothing added, nothing lost).
 
 use crate::helpers::{
-    advice_on_page, advised_wedge, fresh_data_dir, long_case, spawn_app, tiny_case,
+    advice_on_page, advised_wedge, cancel_running, fresh_data_dir, long_case, spawn_app, tiny_case,
 };
 use crate::schema::assert_conforms;
 use mpsfsi::case::{parse_case_value, Limits, ValidCase};
@@ -253,13 +253,7 @@ async fn the_submission_and_the_job_page_carry_the_envelope_advice() {
     let list = advice_on_page(&page);
     assert!(list.contains("25 spacings across"), "{list}");
 
-    let r = app
-        .client
-        .post(app.url(&format!("/v1/jobs/{busy}/cancel")))
-        .send()
-        .await
-        .unwrap();
-    assert!(r.status().is_success(), "{}", r.status());
+    cancel_running(&app, &busy).await;
     let job = app.wait_finished(&id).await;
     assert_eq!(job["status"], "succeeded", "{job}");
     assert_eq!(job["summary"]["advice"][0].as_str(), Some(line));
