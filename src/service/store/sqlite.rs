@@ -90,10 +90,10 @@ impl SqliteStore {
         .fetch_optional(&self.pool)
         .await?;
         let Some((id,)) = row else { return Ok(None) };
-        let (case_json,): (String,) = sqlx::query_as("SELECT case_json FROM jobs WHERE id = ?")
-            .bind(&id)
-            .fetch_one(&self.pool)
-            .await?;
+        let case_json = self
+            .case_text_of(&id)
+            .await?
+            .ok_or(sqlx::Error::RowNotFound)?;
         let row = self.get_text(&id).await?.ok_or(sqlx::Error::RowNotFound)?;
         Ok(Some(ClaimedJob { row, case_json }))
     }
@@ -112,8 +112,12 @@ impl SqliteStore {
     }
 
     pub async fn case_text(&self, id: Uuid) -> Result<Option<String>, sqlx::Error> {
+        self.case_text_of(&id.to_string()).await
+    }
+
+    async fn case_text_of(&self, id: &str) -> Result<Option<String>, sqlx::Error> {
         let row: Option<(String,)> = sqlx::query_as("SELECT case_json FROM jobs WHERE id = ?")
-            .bind(id.to_string())
+            .bind(id)
             .fetch_optional(&self.pool)
             .await?;
         Ok(row.map(|(text,)| text))
