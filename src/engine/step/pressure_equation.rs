@@ -153,29 +153,27 @@ pub(super) fn assemble_pressure_equation<K: Kernel>(
     let fills = fills.as_deref();
     // one off-diagonal coefficient c_ij: into the matrix when j is an unknown, else its
     // Dirichlet value into the right-hand side (returned)
-    let off_diagonal = |j: usize, c: Real, cols: &mut Vec<u32>, vals: &mut Vec<Real>| {
+    let off_diagonal = |j: usize, c: Real, out: &mut Entries| {
         let uj = unknown_of[j];
         if uj != u32::MAX {
-            cols.push(uj);
-            vals.push(-c);
+            out.push(uj, -c);
             0.0
         } else {
             c * dirichlet[j]
         }
     };
-    // row `row` appended to cols/vals; returns the right-hand side
-    let row_entries_unscaled = |row: usize, cols: &mut Vec<u32>, vals: &mut Vec<Real>| -> Real {
+    // row `row` appended to `out`; returns the right-hand side
+    let row_entries_unscaled = |row: usize, out: &mut Entries| -> Real {
         let i = particle_of[row] as usize;
         let mut diag = compress;
         let mut b = -source[i];
         if operator_rows && contacts.of(i).is_empty() {
             for (j, c) in laplacian_row::<K>(kind, &cloud, lattice, i).off_diagonal {
                 diag += c;
-                b += off_diagonal(j, c, cols, vals);
+                b += off_diagonal(j, c, out);
             }
             soften(i, &mut diag, &mut b);
-            cols.push(row as u32);
-            vals.push(diag);
+            out.push(row as u32, diag);
             return b;
         }
         // Σ L r over the neighbours present (fluid and wall lattice): zero on a full
@@ -188,11 +186,10 @@ pub(super) fn assemble_pressure_equation<K: Kernel>(
         for_each_lattice_coefficient::<K>(classic, &cloud, c_lap, i, pair_scale, |j, r, l| {
             first_moment += r * l;
             diag += l;
-            b += off_diagonal(j, l, cols, vals);
+            b += off_diagonal(j, l, out);
         });
         soften(i, &mut diag, &mut b);
-        cols.push(row as u32);
-        vals.push(diag);
+        out.push(row as u32, diag);
         let wall_scale = fills.map_or(1.0, |f| 1.0 / f[i]);
         for (c_dot_moment, moment) in contacts.laplacian_terms(i, neumann) {
             b += c_lap * wall_scale * c_dot_moment;
@@ -210,14 +207,14 @@ pub(super) fn assemble_pressure_equation<K: Kernel>(
     };
     // With multi-resolution each row is multiplied by its particle's volume s_i^d, which
     // makes the matrix symmetric (`resolution`); a uniform run skips it.
-    let row_entries = |row: usize, cols: &mut Vec<u32>, vals: &mut Vec<Real>| -> Real {
+    let row_entries = |row: usize, out: &mut Entries| -> Real {
         if scales.is_uniform() {
-            return row_entries_unscaled(row, cols, vals);
+            return row_entries_unscaled(row, out);
         }
-        let before = vals.len();
-        let b = row_entries_unscaled(row, cols, vals);
+        let before = out.len;
+        let b = row_entries_unscaled(row, out);
         let volume = scales.volume(particle_of[row] as usize);
-        for v in &mut vals[before..] {
+        for v in &mut out.vals[before..out.len] {
             *v *= volume;
         }
         b * volume
@@ -230,23 +227,27 @@ pub(super) fn assemble_pressure_equation<K: Kernel>(
         .into_par_iter()
         .map(|c| {
             let (lo, hi) = (c * CHUNK, ((c + 1) * CHUNK).min(nu));
-            let mut rows = RowChunk {
-                lens: Vec::with_capacity(hi - lo),
-                ..RowChunk::default()
-            };
+            let mut lens = Vec::with_capacity(hi - lo);
             let mut rhs = Vec::with_capacity(hi - lo);
             // at most one entry per neighbour plus the diagonal
             let bound: usize = (lo..hi)
                 .map(|row| nb.of(particle_of[row] as usize).len() + 1)
                 .sum();
-            rows.cols.reserve(bound);
-            rows.vals.reserve(bound);
+            let (mut cols, mut vals) = (vec![0; bound], vec![0.0; bound]);
+            let mut out = Entries {
+                cols: &mut cols,
+                vals: &mut vals,
+                len: 0,
+            };
             for row in lo..hi {
-                let before = rows.cols.len();
-                rhs.push(row_entries(row, &mut rows.cols, &mut rows.vals));
-                rows.lens.push((rows.cols.len() - before) as u32);
+                let before = out.len;
+                rhs.push(row_entries(row, &mut out));
+                lens.push((out.len - before) as u32);
             }
-            (rows, rhs)
+            let len = out.len;
+            cols.truncate(len);
+            vals.truncate(len);
+            (RowChunk { lens, cols, vals }, rhs)
         })
         .collect();
     let (rows, rhs_parts): (Vec<RowChunk>, Vec<Vec<Real>>) = parts.into_iter().unzip();
@@ -269,6 +270,25 @@ pub(super) fn assemble_pressure_equation<K: Kernel>(
     sim.workspace.scratch.unknown_of = unknown_of;
     sim.workspace.scratch.particle_of = particle_of;
     sim.workspace.scratch.source_extra = source_extra;
+}
+
+/// A chunk's matrix entries, written into buffers sized for the chunk's bound: a write is
+/// two stores and a counter kept in a register, where `Vec::push` checks the capacity and
+/// stores the length back on every entry (the rows of a 160k-particle matrix took 12.3 ms
+/// instead of 13.4, zeroing the buffers included).
+struct Entries<'a> {
+    cols: &'a mut [u32],
+    vals: &'a mut [Real],
+    len: usize,
+}
+
+impl Entries<'_> {
+    #[inline(always)]
+    fn push(&mut self, col: u32, val: Real) {
+        self.cols[self.len] = col;
+        self.vals[self.len] = val;
+        self.len += 1;
+    }
 }
 
 pub(super) fn solve_pressure(sim: &mut Simulation) -> Result<(usize, Real), SimError> {
