@@ -145,7 +145,7 @@ fn window_samples(
 }
 
 /// The force coefficient of a constant-velocity entry with the time origin at the keel
-/// contact (`contact`, references.md's t): the one-parameter least squares of
+/// contact (`contact`, the t of docs/references.md): the one-parameter least squares of
 /// F = C rho V³ (t - contact) over the interval-mean samples (as for
 /// `fit_force_coefficient`) in `window`. Returns (C, its standard error from the
 /// scatter about the fit). The two-parameter fit below has a slope error of about

@@ -1,5 +1,5 @@
 //! Published and computed reference answers the benchmark and the tests compare with, each
-//! with its source (all from `../shared/references.md`).
+//! with its source (docs/references.md gives every one).
 
 use crate::math::Real;
 
@@ -45,7 +45,7 @@ pub const MARTIN_MOYCE_COLUMN: [(Real, Real); 14] = [
 ];
 
 /// The benchmark compares the surge front for T in this range: earlier times depend on
-/// how the column is released (references.md), later ones are beyond the table.
+/// how the column is released (docs/references.md), later ones are beyond the table.
 pub const SURGE_COMPARISON_RANGE: (Real, Real) = (1.0, 3.0);
 
 /// Koshizuka & Oka (1996) MPS dam-break geometry: column width L (m); the column is 2L
@@ -54,11 +54,11 @@ pub const KOSHIZUKA_OKA_COLUMN_WIDTH: Real = 0.146;
 
 /// Vertical force coefficient C_F = F / (rho V³ t) of a 30° deadrise wedge entering
 /// at constant speed: the nonlinear self-similar solution computed for this project
-/// (references.md; reproduces Zhao & Faltinsen 1993, J. Fluid Mech. 246, peak pressures
+/// (docs/references.md; reproduces Zhao & Faltinsen 1993, J. Fluid Mech. 246, peak pressures
 /// within 0.6%), ±0.3%.
 pub const WEDGE_30_FORCE_COEFFICIENT: Real = 14.04;
 
-/// The modified Logvinovich model's C_F of the same wedge at constant speed (references.md,
+/// The modified Logvinovich model's C_F of the same wedge at constant speed (docs/references.md,
 /// Korobkin 2004): 7 % above the similarity solution.
 pub const LOGVINOVICH_30_FORCE_COEFFICIENT: Real = 15.09;
 
@@ -67,7 +67,7 @@ pub fn wagner_force_coefficient(beta: Real) -> Real {
     std::f64::consts::PI.powi(3) / (4.0 * beta.tan().powi(2))
 }
 
-/// Angular frequency of a linear gravity wave, omega² = g k tanh(k H) (references.md,
+/// Angular frequency of a linear gravity wave, omega² = g k tanh(k H) (docs/references.md,
 /// Standing wave).
 pub fn wave_frequency(g: Real, k: Real, depth: Real) -> Real {
     (g * k * (k * depth).tanh()).sqrt()
@@ -110,7 +110,7 @@ pub fn exact_energy_decay(g: Real, nu: Real, k: Real) -> Option<Real> {
 /// F = d(m_a V)/dt with an added mass of the penetration h only, calibrated to the
 /// similarity solution, m_a(h) = C_F rho h² / 2 (so that F = C_F rho V³ t at constant
 /// speed), and M dV/dt = M g - F (downward positive): (M + m_a(h)) V = M (V0 + g t),
-/// dh/dt = V, from contact at t = 0 (references.md, constant-velocity wedge entry).
+/// dh/dt = V, from contact at t = 0 (docs/references.md, constant-velocity wedge entry).
 #[derive(Debug, Clone, Copy)]
 pub struct FreeFallModel {
     /// Downward speed at contact (m/s).
@@ -160,7 +160,7 @@ impl FreeFall for FreeFallModel {
 }
 
 /// The modified Logvinovich model of a wedge of deadrise `beta` (radians) falling freely
-/// (references.md; Korobkin 2004): the body pressure
+/// (docs/references.md; Korobkin 2004): the body pressure
 /// p/rho = V c c'/s + V' (s + f(x) - h) - V²/2 [1 + x² / (s² (1 + f'²))], s = sqrt(c² - x²),
 /// integrated where it is positive, with Wagner's wetted half-width c = pi h / (2 tan beta),
 /// and closed with M dV/dt = M g - F (downward positive), from contact at t = 0.

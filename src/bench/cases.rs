@@ -75,7 +75,7 @@ pub fn dam_break_case(a: Real) -> Value {
     json!({
         "name": "dam-break",
         "reference": {
-            "source": "references.md, Dam break: Martin & Moyce (1952), Phil. Trans. R. Soc. A 244; Koshizuka & Oka (1996) geometry",
+            "source": "docs/references.md, Dam break: Martin & Moyce (1952), Phil. Trans. R. Soc. A 244; Koshizuka & Oka (1996) geometry",
             "quantity": "surge front x/a against T = t sqrt(2 g / a), RMS relative error for 1 <= T <= 3"
         },
         "fluid": { "density": 1000.0, "kinematic_viscosity": 1.0e-6, "gravity": [0.0, -9.81] },

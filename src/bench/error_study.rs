@@ -15,7 +15,7 @@
 //! - `wedge_free_fall` (when `cases/wedge_free_fall.json` exists): mean relative error
 //!   of the body's velocity loss over 0.6-0.9 t_chine against the momentum model of
 //!   the similarity solution (the reading of the free-fall tests), and the worst sample.
-//! - `standing_wave` (`cases/standing_wave.json`, paper 002 §5.6): relative error of
+//! - `standing_wave` (`cases/standing_wave.json`, Souto-Iglesias et al. 2013 §5.6): relative error of
 //!   the decay rate of the kinetic-energy peaks (`energy.csv`) against the exact linear
 //!   rate (Lamb §349; Lighthill's 4 nu k² is its small-nu limit and is printed); second
 //!   measure the angular frequency from the peak spacing against omega² = g k tanh kH.

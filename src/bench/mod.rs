@@ -11,7 +11,7 @@
 //!   (`scaling.csv`, `scaling.md`);
 //! - [`features`] (`--features`): what each optional feature adds to a step
 //!   (`features.csv`, `features.md`);
-//! - [`operators`] (`--operators`): the operator convergence study of paper 000 §5
+//! - [`operators`] (`--operators`): the operator convergence study of Imoto (2022) §5
 //!   (`operators.md`).
 //!
 //! Shared by the studies: the scenes they start from ([`cases`]), seeded lattice

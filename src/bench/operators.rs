@@ -1,4 +1,4 @@
-//! The operator convergence study of paper 000 §5 (Imoto 2022, Figs. 3-4): on
+//! The operator convergence study of Imoto (2022) §5 (Figs. 3-4): on
 //! Ω = [0,1]², f = sin(x + 2y) and exp(x + 2y), spacings dx = 2⁻³ … 2⁻⁶, regular lattice,
 //! the lattice perturbed by U[-0.2dx, 0.2dx] in each coordinate (seeded), and the
 //! anisotropic lattice of Fig. 4 (spacing dx/2 along x, dx along y). The error is the
@@ -9,7 +9,7 @@
 //! Λ the particles inside Ω. Particles fill Ω extended by r_e on every side, so each
 //! particle of Λ has a full neighbourhood, as in the paper's interior set Ω_h^in.
 //! Weight: w = r_e/r - 1 (the paper's "infinite model") with r_e = 3.1 dx for every
-//! operator (paper 000 does not state h). With this weight the HL and CHL kernels are
+//! operator (Imoto 2022 does not state h). With this weight the HL and CHL kernels are
 //! both proportional to r_e/r³, so they coincide on the regular lattice. Variant names
 //! are those of the case file's `scheme` block where the variant is a scheme choice.
 
@@ -33,7 +33,7 @@ pub struct ConvergenceRow {
     /// `regular`, `perturbed` or `anisotropic`.
     pub lattice: String,
     pub dx: Real,
-    /// E_D of paper 000 §5.
+    /// E_D of Imoto (2022) §5.
     pub error: Real,
     /// Least-squares slope of log E against log dx over the variant's rows (same field
     /// and lattice).
@@ -42,12 +42,12 @@ pub struct ConvergenceRow {
 
 /// Ratio r_e / dx of the study.
 pub const RADIUS_RATIO: Real = 3.1;
-/// Spacings of the study (paper 000 §5).
+/// Spacings of the study (Imoto 2022 §5).
 pub const SPACINGS: [Real; 4] = [0.125, 0.0625, 0.03125, 0.015625];
 /// Seed of the perturbed lattices.
 pub const PERTURBATION_SEED: u64 = 2022;
 
-/// The test fields of paper 000 §5.
+/// The test fields of Imoto (2022) §5.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum Field {
     /// sin(x + 2y)
@@ -104,9 +104,9 @@ impl Field {
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum LatticeKind {
     Regular,
-    /// Each coordinate perturbed by U[-0.2 dx, 0.2 dx] (paper 000 Fig. 3b).
+    /// Each coordinate perturbed by U[-0.2 dx, 0.2 dx] (Imoto 2022 Fig. 3b).
     Perturbed,
-    /// Spacing dx/2 along x, dx along y (paper 000 Fig. 4a).
+    /// Spacing dx/2 along x, dx along y (Imoto 2022 Fig. 4a).
     Anisotropic,
 }
 
@@ -154,9 +154,9 @@ pub fn lattice(kind: LatticeKind, dx: Real, seed: u64) -> (Vec<Vec2>, Vec<usize>
 pub enum StudiedOperator {
     Gradient(GradientKind),
     Laplacian(LaplacianKind),
-    /// Imoto's regular second derivatives (∂xx, ∂yy), paper 000 eq. 26.
+    /// Imoto's regular second derivatives (∂xx, ∂yy), Imoto (2022) eq. 26.
     RegularSecondDerivative,
-    /// Imoto's mixed derivative ∂xy, paper 000 eq. 27.
+    /// Imoto's mixed derivative ∂xy, Imoto (2022) eq. 27.
     MixedDerivative,
     /// Paper 000 eq. 29 (anisotropic ∂xx, ∂yy).
     AnisotropicSecondDerivative,
@@ -209,9 +209,9 @@ impl StudiedOperator {
 }
 
 /// E_D of one operator on one distribution. The classic gradient ("minimum_pressure")
-/// is evaluated in its linear form Σ g_ij f_ij (paper 000 eq. 13; the minimum-pressure
+/// is evaluated in its linear form Σ g_ij f_ij (Imoto 2022 eq. 13; the minimum-pressure
 /// shift is a stabiliser, not part of the consistency study); classic, second-order and
-/// HL/CHL Laplacians use the particle's own n_i, λ_i as paper 000 §3.1 does.
+/// HL/CHL Laplacians use the particle's own n_i, λ_i as Imoto (2022) §3.1 does.
 pub fn relative_error(
     op: StudiedOperator,
     field: Field,
@@ -351,7 +351,7 @@ pub fn study_constants(dx: Real) -> LatticeConstants {
 /// `--operators`: the convergence study as `operators.md`.
 pub fn write_operators(out_dir: &Path) -> io::Result<()> {
     let rows = convergence_table();
-    let mut md = String::from("# Operator convergence study (paper 000 §5)\n\n");
+    let mut md = String::from("# Operator convergence study (Imoto 2022 §5)\n\n");
     md.push_str(&convergence_markdown(&rows));
     std::fs::write(out_dir.join("operators.md"), md)
 }

@@ -342,7 +342,7 @@ fn score_free_fall(case: &Case, dir: &Path) -> io::Result<Score> {
         .iter()
         .map(|e| e.1)
         .fold(0.0, |w: Real, e| if e.abs() > w.abs() { e } else { w });
-    // references.md's own closure of a free fall, on the same constant-speed force: the
+    // the closure of a free fall in docs/references.md, on the same constant-speed force: the
     // two models part in the deceleration's added mass (by 4 % for a body a quarter of
     // the shipped mass), so the note gives both
     let logvinovich = reference::LogvinovichFreeFall::matching(&model, beta);

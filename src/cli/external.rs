@@ -32,7 +32,8 @@ fn block_on(
     }
 }
 
-/// `mpsfsi bench`: the study of DESIGN.md §5 (report.md, results.csv, SVG plots).
+/// `mpsfsi bench`: the run-time-against-error study of docs/performance.md (report.md,
+/// results.csv, SVG plots).
 pub fn bench(args: BenchArgs) -> i32 {
     let options = mpsfsi::bench::BenchOptions {
         quick: args.quick,

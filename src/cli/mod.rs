@@ -1,4 +1,4 @@
-//! Command line of DESIGN.md §2.1: `run`, `check`, `schema`, `serve`, `bench`, and
+//! Command line (README.md; docs/contracts.md): `run`, `check`, `schema`, `serve`, `bench`, and
 //! `plot` (a flow picture from a run directory's snapshots).
 //!
 //! Exit codes: 0 success; 1 a run that failed or was cancelled (the run directory

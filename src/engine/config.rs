@@ -16,11 +16,11 @@ use crate::math::{rotate, vec2, Real, Vec2};
 pub enum Source {
     /// PND deviation (n* - n0)/n0 (Koshizuka & Oka 1996).
     Pnd,
-    /// Higher-order source HS (paper 004 eq. 3).
+    /// Higher-order source HS (Ikari, Khayyer & Gotoh 2015 eq. 3).
     HigherOrder,
-    /// HS plus error-compensating terms ECS (paper 004 eqs. 10-11).
+    /// HS plus error-compensating terms ECS (Ikari, Khayyer & Gotoh 2015 eqs. 10-11).
     HigherOrderEcs,
-    /// Velocity divergence plus the PND deviation relaxed by `relaxation` (paper 003
+    /// Velocity divergence plus the PND deviation relaxed by `relaxation` (Sun et al. 2022
     /// eq. 49 family).
     Mixed { relaxation: Real },
 }

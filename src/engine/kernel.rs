@@ -14,7 +14,7 @@ pub trait Kernel: Copy + Send + Sync + 'static {
     fn dw(r: Real, re: Real) -> Real;
     /// d²w/dr²
     fn d2w(r: Real, re: Real) -> Real;
-    /// Weight of the higher-order Laplacian (paper 004 eq. 9): w'' - w'/r.
+    /// Weight of the higher-order Laplacian (Ikari, Khayyer & Gotoh 2015 eq. 9): w'' - w'/r.
     #[inline]
     fn hl(r: Real, re: Real) -> Real {
         Self::d2w(r, re) - Self::dw(r, re) / r
@@ -117,7 +117,7 @@ impl Kernel for NonSingular {
     }
 }
 
-/// Wendland C2 (paper 004 eq. 26): w = (1 - q)⁴ (1 + 4q).
+/// Wendland C2 (Ikari, Khayyer & Gotoh 2015 eq. 26): w = (1 - q)⁴ (1 + 4q).
 #[derive(Debug, Clone, Copy, Default)]
 pub struct WendlandC2;
 

@@ -7,7 +7,7 @@
 //! The Laplacian and divergence coefficients are normalised on the initial lattice,
 //! as lambda normalises the classic Laplacian (Koshizuka & Oka 1996): the Laplacian of
 //! |x|² is 2d and the divergence of x is d exactly on the lattice, for every kernel.
-//! With the 1/n0 prefactor of paper 004 eqs. 3 and 9 the HL Laplacian of |x|² is 8.5
+//! With the 1/n0 prefactor of Ikari, Khayyer & Gotoh (2015) eqs. 3 and 9 the HL Laplacian of |x|² is 8.5
 //! instead of 4 at r_e = 2.1 l0 (Koshizuka kernel), which scales pressures down.
 
 use super::operators::LatticeConstants;
@@ -68,7 +68,7 @@ impl MpsParameters {
             LatticeConstants::compute::<K>(l0, re_lap, 2),
         ));
         let laplacian_coefficient = match scheme.laplacian {
-            // Imoto's second-order Laplacian is the classic one (paper 000 Theorem 3.1)
+            // Imoto's second-order Laplacian is the classic one (Imoto 2022 Theorem 3.1)
             LaplacianKind::Classic | LaplacianKind::SecondOrder => lattice_lap.classic_coefficient,
             _ => lattice_lap.hl_coefficient,
         };

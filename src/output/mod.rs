@@ -1,4 +1,5 @@
-//! The run directory of DESIGN.md §2.3: loads.csv, bodies.csv, probes.csv and
+//! The run directory (README.md, "Run directory"; docs/contracts.md): loads.csv,
+//! bodies.csv, probes.csv and
 //! summary.json, plus energy.csv (fluid kinetic and potential energy) when asked for. Rows are flushed as they are written so a running job can be read.
 //!
 //! Sampling: a row of loads.csv at time t is the mean force over the sample interval

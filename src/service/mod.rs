@@ -1,4 +1,4 @@
-//! The job service of DESIGN.md §2.4: submit cases over HTTP, run them on a bounded
+//! The job service (api/openapi.yaml, docs/service.md): submit cases over HTTP, run them on a bounded
 //! worker pool, persist the job records (SQLite, or Postgres shared by many API nodes
 //! and `mpsfsi worker` processes: [`store`]) and run directories under the data
 //! directory, and serve the load histories.
@@ -40,7 +40,7 @@ pub use startup::{run_worker, serve, App, ServeError, ShutdownHandle};
 /// The HTTP contract, served as JSON by `GET /v1/openapi.json`.
 pub const OPENAPI_YAML: &str = include_str!("../../api/openapi.yaml");
 
-/// The case a `POST /v1/jobs` with an empty body runs (DESIGN.md §4: the 30° wedge, the
+/// The case a `POST /v1/jobs` with an empty body runs (cases/README.md: the 30° wedge, the
 /// shipped default job); `None` would make an empty body a 400.
 pub const DEFAULT_CASE: Option<&str> = Some(include_str!(
     "../../cases/wedge_30deg_constant_velocity.json"

@@ -1,4 +1,4 @@
-//! HTTP handlers of DESIGN.md §2.4. The router is built from one table ([`endpoints`]),
+//! HTTP handlers of api/openapi.yaml. The router is built from one table ([`endpoints`]),
 //! which is also what the contract test compares with `api/openapi.yaml`.
 
 use super::error::ApiError;

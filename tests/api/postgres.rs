@@ -1,4 +1,4 @@
-//! Many API nodes and workers on one Postgres (DESIGN.md §2.4, README "Many machines"):
+//! Many API nodes and workers on one Postgres (docs/service.md, README "Many machines"):
 //! nodes are in-process with `--workers 0`, workers are `mpsfsi worker` processes, each
 //! test has its own throwaway server ([`PgServer`]).
 

@@ -147,7 +147,7 @@ pub fn csv_rows(path: &std::path::Path, name: &str) -> Vec<Vec<f64>> {
 /// similarity solution, at every bodies.csv row (time, x, y, angle, vx, vy, omega) of
 /// 0.6-0.9 t_chine: (time, relative error of V0 - V). Wagner's model writes the entry
 /// force as F = d(m_a V)/dt with an added mass of the penetration h only; calibrated to
-/// the similarity solution (references.md), m_a(h) = C_F rho h² / 2 so that F = C_F rho
+/// the similarity solution (docs/references.md), m_a(h) = C_F rho h² / 2 so that F = C_F rho
 /// V³ t at constant speed, and with M dV/dt = M g - F (downward positive) the body obeys
 /// (M + m_a(h)) V = M (V0 + g t), dh/dt = V, integrated here with a step far below the
 /// run's.
@@ -155,9 +155,9 @@ pub fn momentum_model_errors(case: &Case, mass: Real, bodies: &[Vec<f64>]) -> Ve
     velocity_loss_against(&momentum_model(case, mass), bodies)
 }
 
-/// The same against the modified Logvinovich model (references.md's closure of a free
-/// fall) with its force scaled onto the similarity solution's at constant speed: the two
-/// models part in the added mass of the deceleration (`LogvinovichFreeFall`).
+/// The same against the modified Logvinovich model (the closure of a free fall in
+/// docs/references.md) with its force scaled onto the similarity solution's at constant
+/// speed: the two models part in the added mass of the deceleration (`LogvinovichFreeFall`).
 pub fn logvinovich_errors(case: &Case, mass: Real, bodies: &[Vec<f64>]) -> Vec<(Real, Real)> {
     let model = LogvinovichFreeFall::matching(&momentum_model(case, mass), 30f64.to_radians());
     velocity_loss_against(&model, bodies)

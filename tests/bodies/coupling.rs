@@ -149,7 +149,7 @@ fn free_fall_wedge_velocity_matches_its_own_loads() {
     // by the time to enter one spacing (the first particle row is l0/2 below the
     // surface, the wedge l0/2 above it). Sampled every two particle-row periods
     // 2 l0 / V: the force of a particle method comes in bursts as the wedge meets
-    // each lattice row (references.md: filter over a few discreteness periods), and
+    // each lattice row (the discreteness period of `output::filter`), and
     // between bursts it can fall below the weight.
     let (c_f, speed0) = (14.04, -v0);
     let start_time =

@@ -1,5 +1,5 @@
 //! Bodies at rest in still water: buoyancy of a fixed submerged body and the
-//! equilibrium draft of a floating box (Archimedes; references.md, Hydrostatics).
+//! equilibrium draft of a floating box (Archimedes; docs/references.md, Hydrostatics).
 
 use crate::common::*;
 use mpsfsi::coupling::CouplingOptions;

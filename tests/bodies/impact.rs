@@ -4,7 +4,7 @@
 //!
 //! The constant-velocity wedges (breadth B = 0.5 m, V = 6.15 m/s, the shipped tank of
 //! 8B x 2.4B, B/l0 = 100 unless a test says otherwise) are compared with the similarity
-//! solution (references.md) by the force coefficient read the way a user reads it: C_F
+//! solution (docs/references.md) by the force coefficient read the way a user reads it: C_F
 //! is the least-squares slope of F_y = C_F rho V³ (t - t0) through the origin over the
 //! rows between 20 % and 85 % of Wagner's chine-wetting time t_chine = B tan β / (π V)
 //! after t0, the first row whose |F_y| exceeds 1 % of the run's peak. Each run also

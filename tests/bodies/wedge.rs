@@ -1,5 +1,5 @@
 //! Constant-velocity entry of the 30° wedge (the default job) against the nonlinear
-//! similarity solution, C_F = F / (rho V³ t) = 14.04 (references.md; Zhao & Faltinsen
+//! similarity solution, C_F = F / (rho V³ t) = 14.04 (docs/references.md; Zhao & Faltinsen
 //! 1993). Plain Wagner (23.26) is an upper bound, von Karman (9.42) a lower bound.
 
 use crate::common::*;
@@ -18,7 +18,7 @@ const T_CHINE: f64 = 0.5 * 0.577_350_269 / (std::f64::consts::PI * V);
 
 pub struct WedgeFit {
     pub spacing: f64,
-    /// C_F with the time origin at the keel contact (references.md's t): the
+    /// C_F with the time origin at the keel contact (the t of docs/references.md): the
     /// least-squares fit of F = C rho V³ t over the window.
     pub c: f64,
     /// Its standard error from the scatter about the fit.
@@ -155,7 +155,7 @@ pub fn wedge_fit(overrides: &[String]) -> WedgeFit {
     fit
 }
 
-/// Similarity solution's Cp along the wetted wall (references.md), (z/(Vt), Cp).
+/// Similarity solution's Cp along the wetted wall (docs/references.md), (z/(Vt), Cp).
 const CP_TABLE: [(f64, f64); 8] = [
     (-1.0, 4.59),
     (-0.75, 4.54),

@@ -225,7 +225,7 @@ fn failed_run_exits_non_zero_and_keeps_its_directory() {
 
 #[test]
 fn serve_and_bench_parse_their_flags() {
-    // whatever they do in this build, the flags of DESIGN.md §2.1 are accepted:
+    // whatever they do in this build, the flags of README.md are accepted:
     // clap's usage error is exit code 2 with "unexpected argument"
     let out = mpsfsi(&["serve", "--addr", "not-an-address"]);
     assert_eq!(out.status.code(), Some(2), "a bad address is a usage error");

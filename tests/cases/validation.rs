@@ -664,7 +664,8 @@ fn random_bad_numbers_are_rejected_or_built_without_panics() {
 
 #[test]
 fn design_example_case_is_valid() {
-    // the case of DESIGN.md §2.2: a prescribed wedge over a tank
+    // the case format's full example (docs/contracts.md): a prescribed wedge over a tank,
+    // every block written out
     let v = json!({
       "name": "wedge-30deg-constant-velocity",
       "fluid": { "density": 1000.0, "kinematic_viscosity": 1.0e-6, "gravity": [0.0, -9.81] },
@@ -684,7 +685,7 @@ fn design_example_case_is_valid() {
       "scheme": { }
     });
     validate(&parse_case_value(v).unwrap(), &Limits::default())
-        .expect("the DESIGN.md example is valid");
+        .expect("the full example case is valid");
 }
 
 #[test]

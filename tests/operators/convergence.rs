@@ -47,7 +47,7 @@ fn second_order_and_laplacian_operators_converge_in_second_order_on_the_regular_
 #[test]
 fn classic_second_order_operators_do_not_converge_on_the_perturbed_lattice_but_least_squares_does()
 {
-    // paper 000: "converge in the second order in the uniform case, but diverge in the
+    // Imoto (2022): "converge in the second order in the uniform case, but diverge in the
     // non-uniform case, similar to the existing Laplace operator" (Fig. 3b)
     for op in [
         StudiedOperator::RegularSecondDerivative,
@@ -102,7 +102,7 @@ fn anisotropic_lattice_errors(op: StudiedOperator, field: Field, ratio: f64) -> 
 
 #[test]
 fn anisotropic_operators_beat_isotropic_ones_on_the_half_spacing_lattice() {
-    // paper 000 Fig. 4: "better accuracy and convergence of the anisotropic operators
+    // Imoto (2022) Fig. 4: "better accuracy and convergence of the anisotropic operators
     // than the conventional operators". The paper does not state h; the isotropic
     // Laplacian's error on this lattice is an O(1) bias whose size depends on r_e/dx
     // (it nearly cancels near r_e = 2.5 dx), so the comparison is made where MPS is

@@ -6,7 +6,7 @@
 //! the paper; HL (eq. 9) and CHL (eqs. 18-25), lattice-normalised (see
 //! `engine::operators`). Explicit Euler in time with dt = 0.2 / max|c_ii| to t = 0.1.
 //!
-//! Reference: the series solution (Young et al. 2005, paper 004 eq. 30, not in the text
+//! Reference: the series solution (Young et al. 2005, Ikari, Khayyer & Gotoh 2015 eq. 30, not in the text
 //! copy; re-derived here): φ = φ_s - Σ_{n,m} c_nm sin(nπx) sin(mπy) e^{-(n²+m²)π² t},
 //! φ_s = Σ_n b_n sin(nπx) sinh(nπ(1-y)) / sinh(nπ), b_n = 2(-1)^{n+1}/(nπ),
 //! c_nm = 4 m (-1)^{n+1} / (n π² (n² + m²)) (the sine coefficients of φ_s, by Green's
@@ -122,7 +122,7 @@ fn chl_is_more_accurate_than_hl_and_both_within_one_percent_at_fine_resolution()
     for per_side in [10, 100] {
         let hl = rmse(LaplacianKind::HigherOrder, per_side);
         let chl = rmse(LaplacianKind::CorrectedHigherOrder, per_side);
-        println!("paper 004 §4.5 diffusion, L/D = {per_side}: RMSE HL {hl:.4e}, CHL {chl:.4e}");
+        println!("Ikari, Khayyer & Gotoh 2015 §4.5 diffusion, L/D = {per_side}: RMSE HL {hl:.4e}, CHL {chl:.4e}");
         table.push((per_side, hl, chl));
     }
     for &(per_side, hl, chl) in &table {

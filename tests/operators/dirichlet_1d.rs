@@ -12,13 +12,13 @@
 //!   et al. 2011). The paper: the classic solution does not converge; the corrected
 //!   formulation recovers the exact solution.
 //!
-//! The corrected operator (paper 002 eqs. 74-75; the text copy lacks the formulas, so the
+//! The corrected operator (Souto-Iglesias et al. 2013 eqs. 74-75; the text copy lacks the formulas, so the
 //! one-dimensional boundary term is derived here from the same principle, the
 //! normalisation by Γ and Green's identity on the truncated support):
 //!
 //! ⟨f''⟩_i = (1/Γ_i) [ 2/(λ0 n0) Σ_{j∈Ω} w f_ij + Σ_B 2 W(r_iB) (f_B - f_i) / r_iB ],
 //!
-//! with W the Laplacian-equivalent SPH kernel of w (paper 002 eq. 29): -W'/r ∝ w, so
+//! with W the Laplacian-equivalent SPH kernel of w (Souto-Iglesias et al. 2013 eq. 29): -W'/r ∝ w, so
 //! W ∝ (h - r)² for this weight, normalised to unit integral on the line; Γ_i = ∫_Ω W
 //! (discretely, the sum over the particles in Ω relative to the full line); B the two
 //! end points. Expanding f to second order, the classic sum over the truncated support
@@ -263,10 +263,18 @@ fn check(problem: Problem, label: &str, exact_at_two: bool) {
 
 #[test]
 fn zero_laplacian_dirichlet_classic_drifts_corrected_converges() {
-    check(Problem::ZeroLaplacianDirichlet, "paper 002 §5.5.1", true);
+    check(
+        Problem::ZeroLaplacianDirichlet,
+        "Souto-Iglesias et al. 2013 §5.5.1",
+        true,
+    );
 }
 
 #[test]
 fn constant_source_mixed_classic_drifts_corrected_converges() {
-    check(Problem::ConstantSourceMixed, "paper 002 §5.5.2", false);
+    check(
+        Problem::ConstantSourceMixed,
+        "Souto-Iglesias et al. 2013 §5.5.2",
+        false,
+    );
 }

@@ -4,7 +4,7 @@
 //! half must be hydrostatic, p = ρ g (H - y), within 3 % (measured 0.1-0.8 %) for every
 //! pairing except the ones listed as known to fail it, whose deviation is printed:
 //!
-//! - CMPS (paper 003 eq. 19) with any Laplacian: with P̂ the neighbourhood minimum,
+//! - CMPS (Sun et al. 2022 eq. 19) with any Laplacian: with P̂ the neighbourhood minimum,
 //!   (P_i + P_j) - (P̂_i + P̂_j) = (P_j - P_i) - (P̂_j - P̂_i) + 2(P_i - P̂_i), and in a
 //!   hydrostatic field P̂ varies like P, so the sum approximates ∇P - ∇P̂ ≈ 0 in the bulk
 //!   (measured mean deviation 1-4 at 0.3 s);

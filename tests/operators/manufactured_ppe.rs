@@ -5,10 +5,10 @@
 //! r_e = 3.1 dx, dx = 1/16, 1/32, 1/64. Each Laplacian variant's row (the same rows the
 //! pressure assembly uses) builds the system, solved with the sparse LU.
 //!
-//! Expected (from the operators' derivations and paper 000's truncation study): the
+//! Expected (from the operators' derivations and the truncation study of Imoto 2022): the
 //! least-squares operator is consistent to second order on any cloud with a regular
 //! moment matrix, so its solution converges at least at first order; the classic MPS
-//! Laplacian is inconsistent on disordered clouds (paper 000 Fig. 3b, paper 002 §5.4).
+//! Laplacian is inconsistent on disordered clouds (Imoto 2022 Fig. 3b, Souto-Iglesias et al. 2013 §5.4).
 
 use super::dirichlet_1d::solve_direct;
 use mpsfsi::case::LaplacianKind;

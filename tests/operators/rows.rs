@@ -1,6 +1,6 @@
 //! Properties of the row form that the pressure assembly relies on, and of the
 //! divergence and fallback paths: symmetric rows where the variant is symmetric (so CG
-//! applies), non-symmetric ones where DESIGN says so, linear exactness of the
+//! applies), non-symmetric ones where `LaplacianKind::is_symmetric` says so, linear exactness of the
 //! consistent operators on a disordered cloud, the GC fallback, thread-count
 //! independence, and variant names from a case file.
 
@@ -118,7 +118,7 @@ fn consistent_operators_are_exact_for_linear_and_quadratic_fields_on_a_disordere
             lap[i]
         );
     }
-    // the classic gradient is not exact there (paper 000 Fig. 3b): the test can tell
+    // the classic gradient is not exact there (Imoto 2022 Fig. 3b): the test can tell
     let classic = gradient::<WendlandC2>(GradientKind::Cmps, &cloud, norm, &linear);
     let worst = interior(&pos)
         .iter()

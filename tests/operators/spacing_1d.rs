@@ -120,7 +120,7 @@ fn mps_gradient_and_laplacian_on_the_meshes_of_table_2() {
             (m, g, l)
         })
         .collect();
-    println!("paper 001 §6.2, max relative error of the MPS operators, sin(2πx/L), N = 40:");
+    println!("Isshiki 2014 §6.2, max relative error of the MPS operators, sin(2πx/L), N = 40:");
     println!("| mesh | dφ/dx | d²φ/dx² |");
     for (m, g, l) in &table {
         println!("| {m:?} | {g:.3e} | {l:.3e} |");

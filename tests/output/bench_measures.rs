@@ -660,7 +660,7 @@ fn results_csv_names_the_particle_steps_of_each_run() {
     assert_eq!(column("wall_time_s"), "2.5000");
 }
 
-/// The modified Logvinovich model as references.md states it: at constant speed its
+/// The modified Logvinovich model as docs/references.md states it: at constant speed its
 /// force coefficient is 15.09 on the 30° wedge, and its dV/dt term is the closed form
 /// rho h² (pi k²/2 + k² tan beta - 2k), k = pi / (2 tan beta) (the integral of
 /// sqrt(c² - x²) + |x| tan beta - h over the wetted width).

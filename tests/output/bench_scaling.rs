@@ -315,7 +315,7 @@ fn the_chine_time_of_the_reference_wedge_is_b_tan_beta_over_pi_v() {
     ];
     let (contact, t) = chine_time(&wedge, [0.0, 0.0], 0.0, [0.0, -6.15], 0.0).unwrap();
     assert!(contact.abs() < 1e-12);
-    // references.md: t_chine = 14.9 ms
+    // docs/references.md: t_chine = 14.9 ms
     assert!((t - 0.0149).abs() < 1e-4, "{t}");
     let (_, t20) = chine_time(&wedge, [0.0, 0.0], 0.0, [0.0, -20.0], 0.0).unwrap();
     assert!((t20 - 0.5 * 30f64.to_radians().tan() / (std::f64::consts::PI * 20.0)).abs() < 1e-4);

@@ -6,7 +6,7 @@
 //! 0.29-0.33 later in T (mean 0.31) at every sample from T = 0.84 to 2.83, 17 ms at
 //! Martin & Moyce's a = 57 mm, the order of a gate's release. The delay converges with
 //! resolution: mean 0.262 / 0.281 / 0.310 / 0.317 at a/20 / a/30 / a/40 / a/60, spread
-//! at most 0.032 at each. references.md attributes the early times to the release. At
+//! at most 0.032 at each. docs/references.md attributes the early times to the release. At
 //! T = 0.41 the two agree (1.10 against 1.11): water leaves under a rising gate before
 //! the column falls. Neither a turbulent wall friction nor viscosity closes the gap
 //! without being fitted: a log-law wall shear on the first row changes the front by
@@ -27,9 +27,9 @@ use super::shipped_case;
 use mpsfsi::bench::stress::DAM_BREAK_LONG_CFL;
 use mpsfsi::engine::Simulation;
 
-/// (t sqrt(g/a), H/(2a)) of the residual column, from references.md.
+/// (t sqrt(g/a), H/(2a)) of the residual column, from docs/references.md.
 use mpsfsi::analysis::reference::MARTIN_MOYCE_COLUMN;
-/// (T, Z) of Martin & Moyce (1952), n² = 2, from references.md (one table for the
+/// (T, Z) of Martin & Moyce (1952), n² = 2, from docs/references.md (one table for the
 /// benchmark and this test).
 use mpsfsi::analysis::reference::MARTIN_MOYCE_SURGE as MARTIN_MOYCE;
 

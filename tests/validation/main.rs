@@ -1,4 +1,4 @@
-//! Physics validation against references (../shared/references.md): hydrostatics, the
+//! Physics validation against references (docs/references.md): hydrostatics, the
 //! Martin & Moyce dam break and the viscous standing wave. Cases are the shipped files
 //! in cases/.
 

@@ -1,4 +1,5 @@
-//! Viscous standing wave (paper 002 §5.6; references.md, Standing wave): one wavelength
+//! Viscous standing wave (Souto-Iglesias et al. 2013 §5.6; docs/references.md, Standing
+//! wave): one wavelength
 //! (L = 1 m, k = 2 pi) in a tank with free-slip ends, depth 0.5 m, amplitude 0.025 m,
 //! nu = 5e-3 m²/s, l0 = 10 mm, released at rest with a cosine surface.
 //!

@@ -1,5 +1,5 @@
-//! The particle number density n_i = Σ_j w(r_ij) (Koshizuka & Oka 1996; paper 003
-//! eq. 4) and the HS divergence of the velocity (paper 004 eq. 2), fluid neighbours
+//! The particle number density n_i = Σ_j w(r_ij) (Koshizuka & Oka 1996; Sun et al. 2022
+//! eq. 4) and the HS divergence of the velocity (Ikari, Khayyer & Gotoh 2015 eq. 2), fluid neighbours
 //! only: a wall adds its own shares (`WallContacts::number_density`,
 //! `WallContacts::add_divergence`). The step needs both at the same positions, so they
 //! come from one pass over each neighbourhood.

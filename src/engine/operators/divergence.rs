@@ -1,7 +1,7 @@
 //! Divergence of a vector field matching each gradient: ⟨∇·u⟩_i = Σ_j g_ij · u_ij with
 //! the gradient's own coefficients g_ij (see `gradient`). For the minimum-pressure,
 //! CMPS and symmetric kinds this is the classic MPS divergence (d/n) Σ u_ij · r_ij w / r²
-//! (Koshizuka & Oka 1996; paper 003 eq. 14); for GC the corrected one (paper 003
+//! (Koshizuka & Oka 1996; Sun et al. 2022 eq. 14); for GC the corrected one (Sun et al. 2022
 //! eq. 22 applied componentwise); for the anisotropic and least-squares kinds the trace
 //! of their gradient of u. The step's HS divergence is in `density`, beside the number
 //! density it shares its pass with.

@@ -1,19 +1,19 @@
 //! Gradient operators ⟨∇f⟩_i, each as vector row coefficients g_ij with
 //! ⟨∇f⟩_i = Σ_j g_ij f_ij for the linear ones:
 //!
-//! - classic (Koshizuka & Oka 1996; paper 000 eq. 13, paper 003 eq. 13):
+//! - classic (Koshizuka & Oka 1996; Imoto 2022 eq. 13, Sun et al. 2022 eq. 13):
 //!   g_ij = (d / n) r_ij w / r², n = n0 or n_i by [`Normalisation`]. Used by
 //!   [`GradientKind::MinimumPressure`] with f_ij replaced by f_j - f̂_i, f̂_i the minimum
 //!   of f over i and its neighbours (stability), and by [`GradientKind::Cmps`] with the
-//!   antisymmetric (f_i + f_j) - (f̂_i + f̂_j) (Khayyer & Gotoh 2008; paper 003 eq. 19),
+//!   antisymmetric (f_i + f_j) - (f̂_i + f̂_j) (Khayyer & Gotoh 2008; Sun et al. 2022 eq. 19),
 //!   and by [`GradientKind::Symmetric`] with f_i + f_j (the SPH-like pair form).
-//! - corrected GC (paper 004 eqs. 12-13, paper 003 eqs. 21-22): g_ij = A_i⁻¹ r_ij w / r²
-//!   with A_i = Σ w r rᵀ / r²: exact for linear fields on any cloud. Where A_i is
+//! - corrected GC (Ikari, Khayyer & Gotoh 2015 eqs. 12-13, Sun et al. 2022 eqs. 21-22):
+//!   g_ij = A_i⁻¹ r_ij w / r² with A_i = Σ w r rᵀ / r²: exact for linear fields on any cloud. Where A_i is
 //!   ill-conditioned (splash, few neighbours, a one-sided line of neighbours) the
 //!   reciprocal condition number falls below [`CORRECTED_GRADIENT_MIN_RCOND`] and the
 //!   classic coefficient is used instead.
-//! - anisotropic (paper 000 eq. 28): g_ij,k = r_ij,k w / (r² n_{i,k}).
-//! - least squares (LSMPS type, Tamai & Koshizuka 2014; paper 003 §3.3): the first
+//! - anisotropic (Imoto 2022 eq. 28): g_ij,k = r_ij,k w / (r² n_{i,k}).
+//! - least squares (LSMPS type, Tamai & Koshizuka 2014; Sun et al. 2022 §3.3): the first
 //!   components of the weighted least-squares fit of f_ij on the second-order basis
 //!   (x, y, x², xy, y²) scaled by r_e; second-order accurate on any non-degenerate cloud.
 
@@ -190,10 +190,10 @@ pub struct PressureGradient {
 }
 
 /// The pressure gradient that moves particle i, fluid neighbours plus virtual wall points:
-/// - minimum pressure (paper 003 eq. 13): (d/n0) [Σ r (p_j - p̂_i) w/r² + M1 (p_i - p̂_i) + M2 c];
+/// - minimum pressure (Sun et al. 2022 eq. 13): (d/n0) [Σ r (p_j - p̂_i) w/r² + M1 (p_i - p̂_i) + M2 c];
 /// - symmetric: (d/n0) [Σ r (p_i + p_j) w/r² + 2 p_i M1 + M2 c];
-/// - CMPS (paper 003 eq. 19): (d/n0) [Σ r (p_i + p_j - p̂_i - p̂_j) w/r² + 2 (p_i - p̂_i) M1 + M2 c];
-/// - corrected (paper 004 eqs. 12-13, the others away from walls): C [Σ r (p_j - p_i) w/r²
+/// - CMPS (Sun et al. 2022 eq. 19): (d/n0) [Σ r (p_i + p_j - p̂_i - p̂_j) w/r² + 2 (p_i - p̂_i) M1 + M2 c];
+/// - corrected (Ikari, Khayyer & Gotoh 2015 eqs. 12-13, the others away from walls): C [Σ r (p_j - p_i) w/r²
 ///   + M2 c] / n0 with C over the fluid and wall moments, plus the repulsive part of the
 ///   minimum-pressure form, κ (d/n0) (p_i - p̂_i) Σ r w / r² over pairs closer than
 ///   `close` (silent on the lattice, so still water stays still; it pushes clustered

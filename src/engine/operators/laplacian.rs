@@ -2,27 +2,27 @@
 //! c_ij (the pressure equation's row of particle i is c_ij off the diagonal and
 //! -Σ_j c_ij on it):
 //!
-//! - classic (Koshizuka & Oka 1996; paper 003 eqs. 15-16, paper 000 eq. 14):
+//! - classic (Koshizuka & Oka 1996; Sun et al. 2022 eqs. 15-16, Imoto 2022 eq. 14):
 //!   c_ij = 2d / (λ n) w, with n λ = n0 λ0 ([`Normalisation::Reference`]) or the
 //!   particle's own Σ w r² ([`Normalisation::Local`]). Symmetric with the reference.
-//! - higher order HL (Khayyer & Gotoh 2010; paper 004 eq. 9): c_ij = α (w'' - w'/r).
+//! - higher order HL (Khayyer & Gotoh 2010; Ikari, Khayyer & Gotoh 2015 eq. 9): c_ij = α (w'' - w'/r).
 //!   The paper's α = 1/n0 gives about twice the Laplacian of |x|² on the lattice (the
 //!   ∂f_ij/∂r ≈ -2 f_ij / r step of its eq. 7), so α is normalised like λ: α = 2d /
 //!   Σ (w'' - w'/r) r² on the reference lattice (or per particle with `Local`).
 //!   Symmetric with the reference.
-//! - corrected higher order CHL (Ikari, Khayyer & Gotoh 2015; paper 004 eqs. 18-25):
+//! - corrected higher order CHL (Ikari, Khayyer & Gotoh 2015, eqs. 18-25):
 //!   c_ij = α [(w''/r² - 4 w'/r³) r_ijᵀ C_i r_ij + (w'/r) tr C_i], C_i = (Σ -w' r rᵀ / r)⁻¹
 //!   the corrective matrix of eq. 19 (without its 1/n0, absorbed in α), eq. 23 for
 //!   ∇f_ij · C∇w, eq. 24 for ∇·(C∇w) with the ∂C/∂x_ij of eq. 25; α normalised on the
 //!   lattice as for HL. Non-symmetric (C_i is per row). Falls back to HL where C_i is
 //!   ill-conditioned.
-//! - second order (Imoto 2022; paper 000 eq. 26 summed over k, eq. 31's isotropic
+//! - second order (Imoto 2022, eq. 26 summed over k, eq. 31's isotropic
 //!   form): c_ij = 2d/(nλ - d²θ) w Σ_k x_k²/r² - 2d³θ/(nλ(nλ - d²θ)) w, which the paper's
 //!   Theorem 3.1 shows equals the classic coefficient with the same n, λ (so it is kept
 //!   as a separate name, computed through eq. 26, for the case files).
-//! - anisotropic (paper 000 eqs. 29, 31): c_ij = 2 [1 … 1] Θ_i⁻¹ q_ij w / r²,
+//! - anisotropic (Imoto 2022 eqs. 29, 31): c_ij = 2 [1 … 1] Θ_i⁻¹ q_ij w / r²,
 //!   q_ij = (x_1², …, x_d²); always with the particle's own Θ_i. Non-symmetric.
-//! - least squares (LSMPS type, Tamai & Koshizuka 2014; paper 003 §3.3): ∂xx + ∂yy of the
+//! - least squares (LSMPS type, Tamai & Koshizuka 2014; Sun et al. 2022 §3.3): ∂xx + ∂yy of the
 //!   weighted least-squares fit of f_ij on (x, y, x²/2, xy, y²/2) scaled by r_e, weight w.
 //!   Exact for quadratics on any cloud where the moment matrix is regular (second-order
 //!   consistent: error O(h) on disordered clouds, O(h²) on symmetric ones).

@@ -114,7 +114,7 @@ impl<'a> Cloud<'a> {
 /// How the number density and λ in the classic formulas are taken.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub enum Normalisation {
-    /// Per particle: n_i and λ_i of the particle's own neighbourhood, as in paper 000
+    /// Per particle: n_i and λ_i of the particle's own neighbourhood, as in Imoto (2022)
     /// §3.1 ("non-fixed values"); the HL/CHL coefficients likewise from the particle's own
     /// Σ L(r) r² (exact for |x|² wherever the sum is not degenerate).
     Local,

@@ -1,12 +1,12 @@
 //! Moment sums of a neighbourhood that the operators normalise by, and their values on
 //! the full reference lattice.
 //!
-//! Per particle i (paper 000 §3, eqs. 15 and 21; paper 004 eqs. 13 and 19):
+//! Per particle i (Imoto 2022 §3, eqs. 15 and 21; Ikari, Khayyer & Gotoh 2015 eqs. 13 and 19):
 //! - n_i = Σ w, and Σ w r² = n_i λ_i;
-//! - n_{i,k} = Σ w x_k² / r² (eq. 21 of paper 000), the diagonal of the GC matrix
-//!   A_i = Σ w r rᵀ / r² (paper 004 eq. 13 without its 1/n0, which cancels);
-//! - Θ_i = (θ_{i,k,l}) with θ_{i,k,l} = Σ w x_k² x_l² / r² (paper 000 eq. 15);
-//! - the CHL matrix Σ -w' r rᵀ / r (inverse of paper 004 eq. 19 without its 1/n0).
+//! - n_{i,k} = Σ w x_k² / r² (eq. 21 of Imoto 2022), the diagonal of the GC matrix
+//!   A_i = Σ w r rᵀ / r² (Ikari, Khayyer & Gotoh 2015 eq. 13 without its 1/n0, which cancels);
+//! - Θ_i = (θ_{i,k,l}) with θ_{i,k,l} = Σ w x_k² x_l² / r² (Imoto 2022 eq. 15);
+//! - the CHL matrix Σ -w' r rᵀ / r (inverse of Ikari, Khayyer & Gotoh 2015 eq. 19 without its 1/n0).
 
 use super::Cloud;
 use crate::engine::kernel::Kernel;
@@ -34,7 +34,7 @@ pub(crate) struct Moments {
     pub wr2: Real,
     /// Σ w r rᵀ / r²: diagonal n_{i,k}, the GC matrix.
     pub gc: Mat2,
-    /// Θ_i of paper 000.
+    /// Θ_i of Imoto (2022).
     pub theta: Mat2,
 }
 
@@ -61,7 +61,7 @@ pub(crate) fn chl_moment<K: Kernel>(cloud: &Cloud, i: usize) -> Mat2 {
     a
 }
 
-/// The CHL row weight of one pair for a corrective matrix C (paper 004 eqs. 20, 23-25):
+/// The CHL row weight of one pair for a corrective matrix C (Ikari, Khayyer & Gotoh 2015 eqs. 20, 23-25):
 /// (w''/r² - 4 w'/r³) rᵀ C r + (w'/r) tr C. With C = I this is w'' - 2w'/r.
 #[inline]
 pub(crate) fn chl_weight<K: Kernel>(r: Vec2, d: Real, re: Real, c: &Mat2) -> Real {
@@ -81,15 +81,15 @@ pub struct LatticeConstants {
     pub n0: Real,
     /// λ = Σ w r² / Σ w.
     pub lambda: Real,
-    /// θ = Σ w x² y² / r² (paper 000 eq. 15; 0 in 1D).
+    /// θ = Σ w x² y² / r² (Imoto 2022 eq. 15; 0 in 1D).
     pub theta: Real,
-    /// 2d / Σ w r²: the classic Laplacian's 2d / (λ n0) (paper 003 eq. 15), so the
+    /// 2d / Σ w r²: the classic Laplacian's 2d / (λ n0) (Sun et al. 2022 eq. 15), so the
     /// Laplacian of |x|² is 2d on the lattice.
     pub classic_coefficient: Real,
     /// 2d / Σ L_HL(r) r² with L_HL = w'' - w'/r: the HL coefficient that replaces 1/n0
-    /// of paper 004 eq. 9 so the Laplacian of |x|² is 2d on the lattice.
+    /// of Ikari, Khayyer & Gotoh (2015) eq. 9 so the Laplacian of |x|² is 2d on the lattice.
     pub hl_coefficient: Real,
-    /// d / |Σ w'(r) r|: the HS divergence's coefficient that replaces 1/n0 of paper 004
+    /// d / |Σ w'(r) r|: the HS divergence's coefficient that replaces 1/n0 of Ikari, Khayyer & Gotoh (2015)
     /// eq. 2 so the divergence of x is d on the lattice.
     pub hs_divergence_coefficient: Real,
     /// Lattice points within r_e, the point itself excluded.

@@ -1,4 +1,4 @@
-//! Imoto's second-order partial derivative operators (paper 000 §5), two-dimensional:
+//! Imoto's second-order partial derivative operators (Imoto 2022 §5), two-dimensional:
 //!
 //! - regular (eq. 26): ⟨∂_k² f⟩ = 2d/(nλ - d²θ) Σ f_ij x_k² w / r² - 2d²θ/(nλ(nλ - d²θ)) Σ f_ij w;
 //! - mixed (eq. 27): ⟨∂_x∂_y f⟩ = (1/θ) Σ f_ij x y w / r²;
@@ -6,7 +6,7 @@
 //!   q_ij = (x², y²);
 //! - anisotropic mixed (eq. 30): (1/θ_{x,y}) Σ f_ij x y w / r², equal to eq. 27 in 2D.
 //!
-//! n, λ, θ are the particle's own (paper 000 §3.1 "non-fixed values").
+//! n, λ, θ are the particle's own (Imoto 2022 §3.1 "non-fixed values").
 
 use super::moments::moments;
 use super::Cloud;

@@ -41,7 +41,7 @@ pub(super) fn pressure_gradients<K: Kernel>(sim: &Simulation) -> Vec<Vec2> {
     };
     let contacts = &sim.workspace.contacts;
     let neumann = &sim.workspace.scratch.neumann;
-    // Anisotropic and least-squares gradients (paper 000 eq. 28 and LSMPS) away from
+    // Anisotropic and least-squares gradients (Imoto 2022 eq. 28 and LSMPS) away from
     // walls, in the linear form Σ g_ij (p_j - p_i) like GC; particles with wall contacts
     // use GC, whose moment matrix includes the virtual wall points.
     let operator_gradient = matches!(form, GradientKind::Anisotropic | GradientKind::LeastSquares);

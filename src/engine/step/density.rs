@@ -1,5 +1,5 @@
 //! Neighbours, particle number density (with the wall lattice, Harada et al. 2008) and
-//! the HS divergence of the velocity (paper 004 eq. 2), from `engine::operators` and the
+//! the HS divergence of the velocity (Ikari, Khayyer & Gotoh 2015 eq. 2), from `engine::operators` and the
 //! wall model. Number density and divergence are taken together, in one pass over the
 //! neighbours: at x* (n* and the source's ∇·u*) and at the end of the step (n and ∇·u
 //! for the error-compensating source).

@@ -1,4 +1,4 @@
-//! Explicit stage: gravity and viscosity give u*, and x* = x + dt u* (paper 003
+//! Explicit stage: gravity and viscosity give u*, and x* = x + dt u* (Sun et al. 2022
 //! eqs. 9-10).
 
 use super::walls::KernelWeights;

@@ -1,6 +1,7 @@
 //! One projection step of semi-implicit MPS, as a list of named stages.
 //!
-//! Default scheme (MPS-HS-HL-ECS with the corrected gradient, papers 003 and 004):
+//! Default scheme (MPS-HS-HL-ECS with the corrected gradient; Sun et al. 2022,
+//! Ikari, Khayyer & Gotoh 2015):
 //! explicit viscosity and gravity give u*, x*; the pressure Poisson equation with the
 //! higher-order source plus error-compensating terms is solved on x* with the
 //! (lattice-normalised) higher-order Laplacian; the corrected gradient corrects
@@ -8,7 +9,7 @@
 //!
 //! Walls and the pressure equation (our formulation): virtual wall points take the
 //! particle's pressure extrapolated with the Neumann condition of an accelerating wall,
-//! p_k = p_i + rho (g - a_w) · (x_k - x_i) (notes §2.2), so the wall adds no unknowns
+//! p_k = p_i + rho (g - a_w) · (x_k - x_i) (docs/method.md, walls), so the wall adds no unknowns
 //! and no matrix entries, only right-hand-side terms; the same extrapolation gives the
 //! wall part of the gradient, whose reaction is the load on the wall. The kinematic
 //! condition enters the source: virtual points move with the wall, so the HS source
@@ -111,7 +112,7 @@ fn step<K: Kernel>(
     });
 
     timed(&mut times.explicit_forces, || {
-        // u* = u + dt (g + nu ∇²u), paper 003 eq. 9; x* = x + dt u*, eq. 10
+        // u* = u + dt (g + nu ∇²u), Sun et al. (2022) eq. 9; x* = x + dt u*, eq. 10
         explicit::apply_explicit_forces::<K>(sim, &weights, dt, &mut loads);
         explicit::predict_positions(sim, dt);
     });
@@ -141,13 +142,13 @@ fn step<K: Kernel>(
     timed(&mut times.number_density, || {
         // n* with the wall lattice (Harada et al. 2008) and the source's ∇·u*
         density::compute_number_density_and_divergence::<K>(sim);
-        // n* < beta n0 confirmed by a one-sided neighbourhood (paper 003 §2.3)
+        // n* < beta n0 confirmed by a one-sided neighbourhood (Sun et al. 2022 §2.3)
         free_surface::detect_free_surface::<K>(sim);
     });
     timed(&mut times.assemble, || {
-        // the Neumann extrapolation gradient of every wall contact (notes §2.2)
+        // the Neumann extrapolation gradient of every wall contact (docs/method.md, walls)
         pressure_equation::compute_neumann_gradients(sim, dt);
-        // source HS + ECS (paper 004 eqs. 3, 10-11) and HL rows (eq. 9)
+        // source HS + ECS (Ikari, Khayyer & Gotoh 2015 eqs. 3, 10-11) and HL rows (eq. 9)
         pressure_equation::assemble_pressure_equation::<K>(sim, &weights, dt);
     });
     let (iterations, residual) = timed(&mut times.solve, || -> Result<_, SimError> {
@@ -181,7 +182,7 @@ fn step<K: Kernel>(
         }
     }
     timed(&mut times.correct, || {
-        // u^{n+1} = u* - dt/rho ∇p, x^{n+1} = x* + dt (u^{n+1} - u*) (paper 003 eqs. 11-12);
+        // u^{n+1} = u* - dt/rho ∇p, x^{n+1} = x* + dt (u^{n+1} - u*) (Sun et al. 2022 eqs. 11-12);
         // the wall loads
         correction::correct_velocity_and_position::<K>(sim, &walls, &gradient, dt, &mut loads);
     });

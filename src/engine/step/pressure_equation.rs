@@ -138,7 +138,7 @@ pub(super) fn assemble_pressure_equation<K: Kernel>(
     let operator_rows = !kind.is_symmetric();
     let cloud = Cloud::new(x, nb, p.re_lap).with_scales(scales);
     let lattice = Normalisation::Reference(p.lattice_lap);
-    // Imoto's second-order Laplacian is the classic one (paper 000 Theorem 3.1)
+    // Imoto's second-order Laplacian is the classic one (Imoto 2022 Theorem 3.1)
     let classic = matches!(kind, LaplacianKind::Classic | LaplacianKind::SecondOrder);
     let neumann = &sim.workspace.scratch.neumann;
     let nu = particle_of.len();

@@ -20,7 +20,7 @@ impl<K: Kernel> KernelWeights<K> {
         Self {
             re: sim.config.params.re,
             re_lap: sim.config.params.re_lap,
-            // Imoto's second-order Laplacian is the classic one (paper 000 Theorem 3.1)
+            // Imoto's second-order Laplacian is the classic one (Imoto 2022 Theorem 3.1)
             classic_laplacian: matches!(
                 sim.config.method.laplacian,
                 LaplacianKind::Classic | LaplacianKind::SecondOrder
