@@ -108,7 +108,7 @@ pub struct Case {
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize, JsonSchema)]
 #[serde(deny_unknown_fields)]
 pub struct Reference {
-    /// Citation or section of references.md.
+    /// Citation: author and year, or a section of docs/references.md.
     pub source: String,
     /// What is compared and how.
     #[serde(default, skip_serializing_if = "Option::is_none")]
@@ -201,7 +201,7 @@ pub struct Wall {
     /// The tangential velocity condition of the viscous term (only read when the
     /// kinematic viscosity is positive): `no_slip` (the default, a real wall) or
     /// `free_slip` (a symmetry plane: the wall resists only the normal velocity, as the
-    /// periodic sides of paper 002's standing wave).
+    /// periodic sides of the standing wave of Souto-Iglesias et al. 2013).
     #[serde(default)]
     pub slip: WallSlip,
 }

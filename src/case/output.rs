@@ -38,9 +38,8 @@ pub struct Probe {
 
 /// How often the load, body and probe rows are written. Each load row is the mean over
 /// its interval, stamped at the interval's end, so an interval that is long against the
-/// event shifts what a reader fits: a 30° wedge's C_F read from rows 1 ms apart came out
-/// 2.4 points higher than from one row a step, a 15° wedge at 8 m/s 11.7 points higher.
-/// The automatic interval resolves any run with a thousand rows.
+/// event shifts what a reader fits (a slamming coefficient comes out high;
+/// docs/validation.md). The automatic interval resolves any run with a thousand rows.
 #[derive(Debug, Clone, Copy, PartialEq, Default)]
 pub enum LoadInterval {
     /// `end / AUTO_ROWS`, at most `AUTO_MAX` seconds.
@@ -112,7 +111,7 @@ impl JsonSchema for LoadInterval {
 }
 
 /// When snapshots are written: a handful by default, so that every run has something to
-/// look at (ten cost the 30° wedge's default job about 1 % of its run time).
+/// look at, at a small share of a run's time (docs/performance.md).
 #[derive(Debug, Clone, Copy, PartialEq, Default)]
 pub enum SnapshotInterval {
     /// [`SnapshotInterval::AUTO_COUNT`] intervals over the run, plus t = 0.

@@ -26,19 +26,19 @@ pub enum GradientKind {
     MinimumPressure,
     /// Antisymmetric pair form (p_i + p_j) r_ij w / r² (SPH-like, reference pressure 0 =
     /// the free-surface value): conserves momentum and is exact for linear fields on the
-    /// lattice, but repulsive pair forces make the square lattice unstable under shear
-    /// (measured: a still tank rearranges with speeds near sqrt(p/rho)).
+    /// lattice, but repulsive pair forces make the square lattice unstable under shear,
+    /// so a still tank rearranges itself.
     Symmetric,
-    /// CMPS (Khayyer & Gotoh 2008, paper 003 eq. 19): (p_i + p_j) - (p̂_i + p̂_j).
+    /// CMPS (Khayyer & Gotoh 2008, Sun et al. 2022 eq. 19): (p_i + p_j) - (p̂_i + p̂_j).
     /// Conserves momentum but differentiates p - p̂, which is constant in a hydrostatic
-    /// column: measured, a still tank falls through its own pressure with it.
+    /// column, so a still tank falls through its own pressure with it.
     Cmps,
-    /// Corrective matrix (GC, paper 004 eqs. 12-13): exact for linear fields in any
+    /// Corrective matrix (GC, Ikari, Khayyer & Gotoh 2015 eqs. 12-13): exact for linear fields in any
     /// arrangement, so still water stays still; falls back to the minimum-pressure form
     /// where the matrix is ill-conditioned (splash).
     #[default]
     Corrected,
-    /// Anisotropic first-order operator (paper 000 eq. 28).
+    /// Anisotropic first-order operator (Imoto 2022 eq. 28).
     Anisotropic,
     /// Least-squares (LSMPS-type).
     LeastSquares,
@@ -48,16 +48,16 @@ pub enum GradientKind {
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize, JsonSchema, Default)]
 #[serde(rename_all = "snake_case")]
 pub enum LaplacianKind {
-    /// 2d/(lambda n0) sum (phi_j - phi_i) w (paper 003 eqs. 15-16).
+    /// 2d/(lambda n0) sum (phi_j - phi_i) w (Sun et al. 2022 eqs. 15-16).
     Classic,
-    /// Higher-order Laplacian HL (paper 004 eq. 9).
+    /// Higher-order Laplacian HL (Ikari, Khayyer & Gotoh 2015 eq. 9).
     #[default]
     HigherOrder,
-    /// Corrected higher-order Laplacian CHL (paper 004 eqs. 18-25); non-symmetric.
+    /// Corrected higher-order Laplacian CHL (Ikari, Khayyer & Gotoh 2015 eqs. 18-25); non-symmetric.
     CorrectedHigherOrder,
-    /// Imoto's second-order operator (paper 000 eqs. 26-27).
+    /// Imoto's second-order operator (Imoto 2022 eqs. 26-27).
     SecondOrder,
-    /// Imoto's anisotropic Laplacian (paper 000 eqs. 29-31).
+    /// Imoto's anisotropic Laplacian (Imoto 2022 eqs. 29-31).
     Anisotropic,
     /// Least-squares, second-order basis (LSMPS-type); non-symmetric.
     LeastSquares,
@@ -83,12 +83,12 @@ impl LaplacianKind {
 pub enum SourceKind {
     /// PND deviation (n* - n0)/n0 (Koshizuka & Oka 1996).
     Pnd,
-    /// Higher-order source HS (paper 004 eq. 3).
+    /// Higher-order source HS (Ikari, Khayyer & Gotoh 2015 eq. 3).
     HigherOrder,
-    /// HS plus error-compensating terms ECS (paper 004 eqs. 10-11).
+    /// HS plus error-compensating terms ECS (Ikari, Khayyer & Gotoh 2015 eqs. 10-11).
     #[default]
     HigherOrderEcs,
-    /// Velocity divergence plus relaxed PND deviation (paper 003 eq. 49 family).
+    /// Velocity divergence plus relaxed PND deviation (Sun et al. 2022 eq. 49 family).
     Mixed,
 }
 
@@ -98,16 +98,14 @@ pub enum SourceKind {
 pub enum SolverKind {
     /// Conjugate gradient with a Jacobi preconditioner.
     PcgJacobi,
-    /// Conjugate gradient with incomplete Cholesky IC(0): 4x fewer iterations than Jacobi
-    /// on the still tank, but its iterations grow with resolution (59 a step at 10k
-    /// particles, 290 at 160k) and its triangular solves run on one thread.
+    /// Conjugate gradient with incomplete Cholesky IC(0): fewer iterations than Jacobi,
+    /// but they grow with resolution, and its triangular solves run on one thread.
     PcgIc0,
     /// Conjugate gradient with a smoothed-aggregation algebraic multigrid V-cycle
     /// (engine::pressure::amg), rebuilt every `amg_rebuild_interval` steps and reused in
     /// between (engine::pressure::reuse). The default because its iterations do not grow
-    /// with resolution (about 6 a step from 10k to 1.3M particles): even rebuilt every
-    /// step, a step at 160k particles is 3x faster than with IC(0). Below about 5k
-    /// particles IC(0) is as fast.
+    /// with resolution, so it is the fastest except on the smallest scenes
+    /// (docs/performance.md).
     #[default]
     PcgAmg,
     /// faer's sparse direct factorisation (Cholesky; LU when non-symmetric).
@@ -134,13 +132,11 @@ pub enum WallLoadKind {
     /// The reaction of the wall terms on the fluid: Σ (m/rho) (p_i + p_k) r w / r² over
     /// the virtual wall points, plus the repulsion safety net and wall viscosity. Its
     /// weights grow like 1/d towards the wall, so it reads the arrangement as well as the
-    /// pressure: on the still tank with the lattice perturbed by ±0.2 l0 it reads 12-20 %
-    /// below the water weight.
+    /// pressure: a still tank with a disordered lattice reads below its water weight.
     Reaction,
     /// The pressure interpolated onto points along the surface and integrated,
     /// F = -∫ p n ds (engine::walls::pressure_load), plus wall viscosity. Exact for a
-    /// hydrostatic field on any arrangement; on the perturbed still tank within ±4.4 % of
-    /// the weight (the sloshing of the released disorder), hence the default.
+    /// hydrostatic field on any arrangement, hence the default (docs/validation.md).
     #[default]
     PressureIntegral,
 }
@@ -158,8 +154,8 @@ pub enum ViscosityKind {
     /// form of the Monaghan–Cleary term: the same ∇²u + 2∇(∇·u) = ∇²u in the bulk of an
     /// incompressible flow, and its dissipation is -2 nu ∫ e:e, so a cut kernel at the
     /// free surface is the stress-free condition. Walls enter as in `laplacian` (the
-    /// mirror velocity). The default: the viscous standing wave decays at 0.649 1/s
-    /// against the exact linear 0.700 (the `laplacian` form: 0.459).
+    /// mirror velocity). The default: a viscous standing wave decays at about the exact
+    /// linear rate with it and far too slowly with `laplacian` (docs/validation.md).
     #[default]
     StrainRate,
 }
@@ -172,23 +168,21 @@ pub enum WallKinematics {
     /// The wall's virtual points move with the wall in the HS divergence,
     /// -c ∇Z·(u_i - u_w), and the Neumann gradient of the virtual pressures is
     /// rho (g - a_w). A particle that falls behind an advancing face is pushed only by
-    /// its fluid neighbours, so the force on a box moving at 1 m/s through still water
-    /// scatters by 756 N/m per step, and a flat plate started impulsively on still water
-    /// carries 1.073 / 1.095 of Wagner's added mass at 10 / 5 mm, rising with refinement
-    /// (tests/bodies/plate_impulse.rs): a flat impact's impulse comes out 7-13 % high.
-    /// The default because it is the one that keeps long runs stable (see `neumann`).
+    /// its fluid neighbours, so the force on a body moving through still water scatters
+    /// from step to step, and a flat plate started impulsively carries more than Wagner's
+    /// added mass, more so with refinement: a flat impact's impulse comes out high
+    /// (docs/validation.md, "Flat impacts"). The default because it is the one that keeps
+    /// long runs stable (see `neumann`).
     #[default]
     Source,
     /// The normal velocity of a particle approaching the wall enters the Neumann gradient,
     /// rho (g - a_w) + (rho/dt) min(0, (u_i - u_w)·n) n, so the virtual pressure behind
     /// the wall pushes it back in the correction; the divergence has no wall term.
-    /// On the impulsively started flat plate it carries Wagner's added mass within
-    /// 3.8 / 2.1 / 1.3 % at 10 / 5 / 2.5 mm, the water under the plate at the plate's
-    /// velocity within 0.1 %, and the force on the moving box scatters by 409 N/m per
-    /// step instead of 756: the choice for a short impact of a flat-bottomed body.
-    /// Not the default: over the floating box's 4 s particles under the box run away
-    /// (108 removed), and on the wedge the force is not self-similar with it
-    /// (F / (rho V³ t) rises from about 9 at 4 ms to 17 at 14 ms at 5 mm).
+    /// An impulsively started flat plate then carries Wagner's added mass and moves the
+    /// water under it at its own velocity, and the force on a moving body scatters less
+    /// from step to step: the choice for a short impact of a flat-bottomed body. Not the
+    /// default: over a long run particles under a floating body run away, and a wedge's
+    /// force is not self-similar with it (docs/validation.md, "Flat impacts").
     Neumann,
 }
 
@@ -200,21 +194,19 @@ pub enum Projection {
     /// MPS projection. The Laplacian is not the HS divergence of the corrected gradient
     /// that then moves the particles, and next to a moving wall the difference is a
     /// first-row error that does not vanish with refinement: a flat plate started
-    /// impulsively on still water carries 1.075 / 1.096 / 1.116 / 1.129 of Wagner's added
-    /// mass at 10 / 5 / 2.5 / 1.25 mm.
+    /// impulsively carries more than Wagner's added mass (docs/validation.md).
     #[default]
     Approximate,
     /// Rows whose neighbours are all unknowns ask that the corrected velocity itself
     /// have the source's HS divergence, wall terms included (engine::step::exact):
     /// GMRES on that non-symmetric system, matrix-free, started from the approximate
     /// solution and preconditioned by the Laplacian's AMG cycle; rows next to the free
-    /// surface keep the Laplacian. It carries the impulsively started plate's added mass
-    /// within 2.1 % of Wagner's (1.003 / 1.014 / 1.021 at 10 / 5 / 2.5 mm with the
-    /// default blend): the approximate projection's excess is the mismatch between the
-    /// Laplacian and the divergence of the corrected gradient. The wedge's force is not
-    /// lowered (at 1 cm with r_e = 2.1 l0: 14.03 ± 0.68 against 14.31 ± 0.39),
-    /// and a run costs 2.4-2.7 times the approximate one (about 14 GMRES iterations a
-    /// step): an option for short impacts of flat-bottomed bodies, not the default.
+    /// surface keep the Laplacian. It brings the impulsively started plate's added mass
+    /// to Wagner's: the approximate projection's excess is the mismatch between the
+    /// Laplacian and the divergence of the corrected gradient. It does not lower a
+    /// wedge's force and a run costs a few times the approximate one
+    /// (docs/validation.md, "Flat impacts"): an option for short impacts of
+    /// flat-bottomed bodies, not the default.
     Exact,
 }
 
@@ -236,14 +228,13 @@ pub struct Scheme {
     /// rebuilt every step). In between, the hierarchy of an earlier step is fitted to
     /// the new matrix (engine::pressure::reuse); it is rebuilt sooner when the
     /// iterations grow by half. The solution keeps the solver tolerance either way.
-    /// The default 20: the scaling bench's still tank builds half as often as at 10 (its
-    /// solve 50 → 40 ms a step at 160k particles), and the 30° wedge at 5 mm takes 14.6
-    /// iterations a step against 14.8 at 10 and at 40.
+    /// The default 20 builds half as often as 10 for as many iterations a step
+    /// (docs/performance.md).
     #[schemars(range(min = 1))]
     pub amg_rebuild_interval: usize,
     /// Influence radius r_e/l0 of PND, gradient and source. 2.5: the slamming force
-    /// converges to the similarity solution with refinement (30° wedge: -3.6 % at 4 mm,
-    /// -0.3 % at 2.5 mm), where 2.1 rises above it (+5.2 % at 5 mm, +11.5 % at 2.5 mm).
+    /// converges to the similarity solution with refinement, where 2.1 rises above it
+    /// (docs/validation.md, "Impact defaults").
     #[schemars(extend("exclusiveMinimum" = 1))]
     pub radius: f64,
     /// Influence radius r_e/l0 of the Laplacian; null: `radius` (3.1 for the classic Laplacian).
@@ -263,8 +254,8 @@ pub struct Scheme {
     /// times the row's diagonal, s the product of the two ramps, so its pressure turns
     /// on over a few steps as it submerges instead of in one. A particle flipping from
     /// surface to interior next to a face released the pressure of its whole
-    /// neighbourhood in one step: the 30° user wedge at 5 mm had a per-step load
-    /// scatter of 0.57 with the binary test and 0.29 with the graded one.
+    /// neighbourhood in one step, most of a slamming load's step-to-step noise
+    /// (docs/validation.md, "Per-step noise").
     pub soft_surface: bool,
     /// Weight of the minimum-pressure repulsion (p_i - p̂_i) Σ r w / r² added to the
     /// corrected gradient: 0 is pure GC, 1 makes it the classic gradient's stabilising part.
@@ -285,11 +276,10 @@ pub struct Scheme {
     /// a pool) otherwise solves its source with a Laplacian short by its fill, so its
     /// pressure comes out n0/n* too high, while the corrected gradient is renormalised to
     /// its actual neighbours: the correction overshoots, and the velocity it gives does
-    /// not shrink with dt. The default 0.5 keeps a wedge's jet root physical: on a 30°
-    /// wedge at 1 cm and CFL 0.2 the fastest particle moves at 31 m/s with it (the jet
-    /// tip's speed is 33 m/s) and at 70-92 m/s without, where single load rows reach 10
-    /// times the load around them. The dam break (`cases/dam_break.json`) sets 0.3: a
-    /// sheet falling onto the pool by the far wall then runs to 5 s at CFL 0.1.
+    /// not shrink with dt. The default 0.5 keeps a wedge's jet root physical: without it
+    /// jet-root particles are thrown out faster than the jet, and single load rows spike
+    /// (docs/validation.md, "Impact defaults"). The dam break (`cases/dam_break.json`)
+    /// sets 0.3, so that a sheet falling onto the pool by the far wall does not rebound.
     #[schemars(range(max = 1), extend("exclusiveMinimum" = 0))]
     pub laplacian_fill_floor: f64,
     /// Relaxation gamma of the PND term in the mixed source.
@@ -320,9 +310,9 @@ pub struct Scheme {
     /// Velocity filter epsilon: each step u_i += epsilon Σ_j w_ij (u_j - u_i) / n0 over
     /// the fluid neighbours (symmetric, so momentum is kept). It damps the odd-even
     /// velocity mode that the divergence and the gradient do not see; 0 disables it.
-    /// The default 0.01 keeps a still tank still for 20 s (load -0.0005 %; without it a
-    /// mode seeded by round-off lifts the load by 3 % at 11 s) and moves the dam-break
-    /// front by under 0.7 %.
+    /// The default 0.01 keeps a still tank still over long runs, where the mode seeded by
+    /// round-off otherwise grows, and leaves a dam-break front practically where it was
+    /// (docs/validation.md).
     #[schemars(range(min = 0, max = 0.5))]
     pub velocity_filter: f64,
     /// Form of the viscous term (only evaluated when the kinematic viscosity is positive).
@@ -340,19 +330,17 @@ pub struct Scheme {
     /// A lone splash particle thrown out at an impact is not a diverged simulation:
     /// DualSPHysics likewise excludes such particles. At the dam break's impact on the
     /// far wall a thin sheet running up the wall flickers between free surface and
-    /// interior, and one of its particles takes 0.8 MPa.
+    /// interior, and one of its particles can take a pressure far above the rest.
     pub runaway_allowance: f64,
     /// Which equation the pressure of particles away from the free surface solves.
     pub projection: Projection,
     /// Share theta of the HL Laplacian kept in the exact projection's rows,
     /// (1 - theta) (HS divergence of the corrected velocity) + theta (HL row): the HS
     /// divergence of the corrected gradient does not see the odd-even pressure mode, so
-    /// without it GMRES stalls at a residual of about 2e-3 and the answer depends on the
-    /// iteration budget (wedge at 1 cm: C_F 13.7 after 5 iterations, 17.0 after 20).
-    /// A larger share moves the plate's added mass towards the approximate projection's
-    /// (1.003 of Wagner's at 1 cm with 0.1, 1.035 with 0.3, 1.075 approximate); the
-    /// default 0.1 is the smallest that keeps the floating box stable over 4 s (with 0.05
-    /// the run fails at 1.6 s).
+    /// without it GMRES stalls and the answer depends on the iteration budget. A larger
+    /// share moves the plate's added mass towards the approximate projection's; the
+    /// default 0.1 is the smallest that keeps the floating box stable over its 4 s
+    /// (docs/validation.md, "Flat impacts").
     pub exact_projection_blend: f64,
 }
 
