@@ -7,12 +7,12 @@ use super::cases::{column_geometry, ColumnGeometry};
 use crate::analysis::{measure, reference};
 use crate::case::Case;
 use crate::math::Real;
-use crate::output::filter::leading_deadrise;
+use crate::output::filter::vertex_deadrise;
 use crate::output::loads_csv::{parse_loads_csv, LoadRow};
+use crate::output::series::csv_to_columns;
 use crate::output::snapshots::{PVD_NAME, SNAPSHOT_DIR};
 use crate::output::vtk::{parse_pvd, parse_vtu, PARTICLES_PART};
 use crate::run::{RunStatus, Summary};
-use crate::service::series::csv_to_columns;
 use std::io;
 use std::path::Path;
 
@@ -245,7 +245,7 @@ struct Entry {
 fn entry(case: &Case, body: &crate::case::Body, velocity: [Real; 2]) -> io::Result<Entry> {
     let speed = vec_norm(velocity);
     let d = [velocity[0] / speed, velocity[1] / speed];
-    let beta = leading_deadrise(&body.polygon, body.angle, velocity)
+    let beta = vertex_deadrise(&body.polygon, body.angle, velocity)
         .ok_or_else(|| io::Error::other("no deadrise"))?;
     // breadth across the motion, keel and free surface along it
     let (s, c) = body.angle.sin_cos();

@@ -250,7 +250,9 @@ pub fn given_velocity(body: &crate::case::Body) -> Vec2 {
 }
 
 /// The smallest deadrise (rad) of the polygon's edges that face the unit direction `d`,
-/// the body placed at its angle; `None` when no edge faces it.
+/// the body placed at its angle; `None` when no edge faces it. (The mean deadrise at the
+/// leading vertex, the wedge-entry time scale of the load filter, is
+/// `output::filter::vertex_deadrise`.)
 pub fn leading_deadrise(body: &crate::case::Body, d: Vec2) -> Option<Real> {
     let points: Vec<Vec2> = body
         .polygon

@@ -145,7 +145,7 @@ pub fn filter_window(case: &Case) -> Real {
         .filter_map(|b| {
             let (Motion::Prescribed { velocity, .. } | Motion::Free { velocity, .. }) = &b.motion;
             let speed = (velocity[0] * velocity[0] + velocity[1] * velocity[1]).sqrt();
-            let beta = leading_deadrise(&b.polygon, b.angle, *velocity)?;
+            let beta = vertex_deadrise(&b.polygon, b.angle, *velocity)?;
             Some(2.0 * case.particle_spacing * beta.tan() / (std::f64::consts::PI * speed))
         })
         .fold(None, |acc: Option<Real>, p| {
@@ -160,8 +160,10 @@ pub fn filter_window(case: &Case) -> Real {
 /// Deadrise angle (rad) at the vertex of `polygon` (body frame, rotated by `angle`)
 /// that leads in the direction of `velocity`: the mean angle of its two edges to the
 /// plane normal to the motion. None when the body does not move or the angle is
-/// outside 5°..85° (flat or needle-like: no wedge-entry time scale).
-pub fn leading_deadrise(polygon: &[[Real; 2]], angle: Real, velocity: [Real; 2]) -> Option<Real> {
+/// outside 5°..85° (flat or needle-like: no wedge-entry time scale). It sets the time
+/// scale of a wedge's entry; the smallest deadrise of the faces that lead, which sets
+/// the jet-root speed and the envelope advice, is [`crate::engine::config::leading_deadrise`].
+pub fn vertex_deadrise(polygon: &[[Real; 2]], angle: Real, velocity: [Real; 2]) -> Option<Real> {
     let speed = (velocity[0] * velocity[0] + velocity[1] * velocity[1]).sqrt();
     if polygon.len() < 3 || !(speed > 0.0) {
         return None;

@@ -11,6 +11,7 @@ pub mod flow;
 pub mod loads_csv;
 pub mod plot;
 pub mod probes;
+pub mod series;
 pub mod snapshots;
 pub mod vtk;
 

@@ -11,6 +11,7 @@ use crate::output::flow::{
     flow_svg, parse_window, read_snapshot, snapshot_times, title, FlowField, SnapshotError,
 };
 use crate::output::plot::PlotError;
+use crate::output::series::{complete_lines, csv_to_columns};
 use axum::body::Bytes;
 use axum::extract::rejection::{BytesRejection, QueryRejection};
 use axum::extract::{DefaultBodyLimit, Path, Query, State};
@@ -386,11 +387,11 @@ async fn read_series(
         if bytes.is_empty() {
             return Ok(format!("{}\n", file.header).into_bytes());
         }
-        return Ok(series::complete_lines(&bytes).to_vec());
+        return Ok(complete_lines(&bytes).to_vec());
     }
     let path = state.jobs.config.job_dir(&row.id).join(file.file);
     match tokio::fs::read(&path).await {
-        Ok(bytes) => Ok(series::complete_lines(&bytes).to_vec()),
+        Ok(bytes) => Ok(complete_lines(&bytes).to_vec()),
         Err(e) if e.kind() == std::io::ErrorKind::NotFound => {
             Ok(format!("{}\n", file.header).into_bytes())
         }
@@ -409,7 +410,7 @@ async fn serve_series(
     if wants_csv(&headers) {
         return Ok(([(header::CONTENT_TYPE, "text/csv; charset=utf-8")], text).into_response());
     }
-    let columns = series::csv_to_columns(&text).map_err(ApiError::internal)?;
+    let columns = csv_to_columns(&text).map_err(ApiError::internal)?;
     let mut body = serde_json::Map::new();
     body.insert("job".into(), Value::String(row.id.to_string()));
     body.insert("status".into(), Value::String(row.status.as_str().into()));

@@ -22,6 +22,7 @@ use super::Config;
 use crate::case::{parse_case_str, CaseError, ValidCase};
 use crate::engine::SimError;
 use crate::math::Real;
+use crate::output::series::complete_lines;
 use crate::run::{run_case, Observer, Progress, RunError, RunStatus};
 use std::collections::HashMap;
 use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering};
@@ -185,7 +186,7 @@ impl SeriesUpload {
                 Err(e) => return Err(e),
             };
             let start = (*offset as usize).min(bytes.len());
-            let new = series::complete_lines(&bytes[start..]);
+            let new = complete_lines(&bytes[start..]);
             if new.is_empty() {
                 continue;
             }

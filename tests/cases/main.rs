@@ -3,6 +3,7 @@
 //! Schema, and the `mpsfsi` command end to end.
 
 mod cli;
+mod layout;
 mod overrides;
 mod schema;
 mod validation;
