@@ -4,8 +4,13 @@
 //! Data flows one way: [`case`] -> [`engine`] scene -> step pipeline -> [`output`].
 //! [`math`] (scalar and vector types) and [`geometry`] (polygon predicates and wall
 //! shapes) sit below both `case` and `engine`.
+//!
+//! Cargo features (both default): `service` ([`service`], the HTTP job service and its
+//! database) and `bench` ([`bench`], the run-time-against-error study). Without them the
+//! crate is the engine, the case format, the coupling and the outputs.
 
 pub mod analysis;
+#[cfg(feature = "bench")]
 pub mod bench;
 pub mod case;
 pub mod coupling;
@@ -14,4 +19,5 @@ pub mod geometry;
 pub mod math;
 pub mod output;
 pub mod run;
+#[cfg(feature = "service")]
 pub mod service;

@@ -2,7 +2,7 @@
 //! `/proc/self/status`, CPU time from `getrusage`. Each probe returns None (or false)
 //! where the system does not offer it.
 
-/// A `/proc/self/status` field given in kB (`VmRSS:	  2092 kB`), in bytes.
+/// A `/proc/self/status` field given in kB (`VmRSS:    2092 kB`), in bytes.
 pub fn parse_status_bytes(status: &str, key: &str) -> Option<u64> {
     status.lines().find_map(|line| {
         let (name, rest) = line.split_once(':')?;

@@ -1,18 +1,22 @@
-//! The subcommands whose engines live in other modules: the job service and the
-//! run-time-versus-error benchmark.
+//! The subcommands whose engines live in other modules and behind Cargo features: the
+//! job service (`service`) and the run-time-versus-error benchmark (`bench`).
 
-use super::{BenchArgs, EXIT_ERROR};
+#[cfg(any(feature = "service", feature = "bench"))]
+use super::EXIT_ERROR;
 
 /// `mpsfsi serve`: the HTTP job service on a tokio runtime until SIGTERM / Ctrl-C.
+#[cfg(feature = "service")]
 pub fn serve(config: mpsfsi::service::Config) -> i32 {
     block_on(mpsfsi::service::serve(config))
 }
 
 /// `mpsfsi worker`: runs jobs of a shared database until SIGTERM / Ctrl-C.
+#[cfg(feature = "service")]
 pub fn worker(args: mpsfsi::service::WorkerArgs) -> i32 {
     block_on(mpsfsi::service::run_worker(args.into()))
 }
 
+#[cfg(feature = "service")]
 fn block_on(
     service: impl std::future::Future<Output = Result<(), mpsfsi::service::ServeError>>,
 ) -> i32 {
@@ -34,7 +38,8 @@ fn block_on(
 
 /// `mpsfsi bench`: the run-time-against-error study of docs/performance.md (report.md,
 /// results.csv, SVG plots).
-pub fn bench(args: BenchArgs) -> i32 {
+#[cfg(feature = "bench")]
+pub fn bench(args: super::BenchArgs) -> i32 {
     let options = mpsfsi::bench::BenchOptions {
         quick: args.quick,
         operators: args.operators,

@@ -73,14 +73,18 @@ pub enum Command {
     /// Print the JSON Schema of the case format (the text of api/case.schema.json).
     Schema,
     /// Run the HTTP job service (README.md, api/openapi.yaml).
+    #[cfg(feature = "service")]
     Serve(mpsfsi::service::Config),
     /// Run jobs from a shared job database (`--database postgres://…`) without serving
     /// HTTP; API nodes are `mpsfsi serve` on the same database (README.md).
+    #[cfg(feature = "service")]
     Worker(mpsfsi::service::WorkerArgs),
     /// Run the run-time-versus-error study and write its report (docs/performance.md).
+    #[cfg(feature = "bench")]
     Bench(BenchArgs),
 }
 
+#[cfg(feature = "bench")]
 #[derive(clap::Args, Debug, Clone)]
 pub struct BenchArgs {
     /// Fewer spacings and variants (minutes, not hours).
@@ -152,8 +156,11 @@ pub fn main(cli: Cli) -> i32 {
             print!("{}", mpsfsi::case::schema::case_schema_json());
             0
         }
+        #[cfg(feature = "service")]
         Command::Serve(args) => external::serve(args),
+        #[cfg(feature = "service")]
         Command::Worker(args) => external::worker(args),
+        #[cfg(feature = "bench")]
         Command::Bench(args) => external::bench(args),
     }
 }

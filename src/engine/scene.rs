@@ -10,6 +10,9 @@ use crate::geometry::{centroid, closest_on_segment, inside, WallShape};
 use crate::math::{cross, rotate, vec2, Real, Vec2};
 use std::collections::HashSet;
 
+/// Line segments, each as its two end points.
+type Segments = Vec<[Vec2; 2]>;
+
 /// Least distance, in spacings, from a lattice point kept as a fluid particle to a wall
 /// or body surface.
 ///
@@ -166,7 +169,7 @@ pub fn build_scene(case: &Case, params: &MpsParameters) -> Scene {
         });
     }
     // 3. keep the candidates outside every solid and clear of every surface
-    let placed: Vec<(Vec<[Vec2; 2]>, Vec<[Vec2; 2]>)> = walls
+    let placed: Vec<(Segments, Segments)> = walls
         .iter()
         .map(|w| {
             let s = w.shape.transformed(w.state.position, w.state.angle);

@@ -40,7 +40,7 @@ fn prescribed_velocity_table_is_integrated_exactly() {
     // ∫ v: ramp to t1 = 0.01 (area v1 t1 / 2), then hold for 0.01
     let (t1, t2) = (0.01, end - 0.01);
     let expect_x = 0.5 * (t1 / 2.0 + t2);
-    let expect_y = -1.0 * (t1 / 2.0 + t2);
+    let expect_y = -(t1 / 2.0 + t2);
     let expect_angle = 2.0 * (t1 / 2.0 + t2);
     let (x0, y0) = (trace.initial[0].x, trace.initial[0].y);
     let last = &trace.steps.last().unwrap().bodies[0];

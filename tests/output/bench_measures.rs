@@ -65,7 +65,7 @@ fn the_force_coefficient_fit_recovers_a_linear_force() {
         .iter()
         .map(|t| {
             let mid = t - 0.5 * dt;
-            if mid < 3e-3 || mid > 12e-3 {
+            if !(3e-3..=12e-3).contains(&mid) {
                 1e9
             } else {
                 c * rho * v.powi(3) * (mid - t0)

@@ -193,11 +193,12 @@ pub struct PressureGradient {
 /// - minimum pressure (Sun et al. 2022 eq. 13): (d/n0) [Σ r (p_j - p̂_i) w/r² + M1 (p_i - p̂_i) + M2 c];
 /// - symmetric: (d/n0) [Σ r (p_i + p_j) w/r² + 2 p_i M1 + M2 c];
 /// - CMPS (Sun et al. 2022 eq. 19): (d/n0) [Σ r (p_i + p_j - p̂_i - p̂_j) w/r² + 2 (p_i - p̂_i) M1 + M2 c];
-/// - corrected (Ikari, Khayyer & Gotoh 2015 eqs. 12-13, the others away from walls): C [Σ r (p_j - p_i) w/r²
-///   + M2 c] / n0 with C over the fluid and wall moments, plus the repulsive part of the
-///   minimum-pressure form, κ (d/n0) (p_i - p̂_i) Σ r w / r² over pairs closer than
-///   `close` (silent on the lattice, so still water stays still; it pushes clustered
-///   particles apart); the minimum-pressure form where C is degenerate.
+/// - corrected (Ikari, Khayyer & Gotoh 2015 eqs. 12-13, the others away from walls):
+///   C [Σ r (p_j - p_i) w/r² + M2 c] / n0 with C over the fluid and wall moments, plus
+///   the repulsive part of the minimum-pressure form, κ (d/n0) (p_i - p̂_i) Σ r w / r²
+///   over pairs closer than `close` (silent on the lattice, so still water stays still;
+///   it pushes clustered particles apart); the minimum-pressure form where C is
+///   degenerate.
 ///
 /// p̂ is the minimum over each neighbourhood ([`minimum_over_neighbourhood`]): `p_min`
 /// gives it for every particle, which CMPS needs (it reads p̂_j); without it p̂_i is

@@ -79,7 +79,7 @@ pub(super) fn remove_runaways(sim: &mut Simulation) -> usize {
 pub(super) fn remove_particles(sim: &mut Simulation, keep: &[bool]) -> usize {
     let removed = keep.iter().filter(|k| !**k).count();
     if removed > 0 {
-        sim.particles.retain(&keep);
+        sim.particles.retain(keep);
         sim.stats.removed += removed;
         // the particles are renumbered: the AMG hierarchy's row keys mean nothing now
         sim.workspace.solver_cache.invalidate();
