@@ -13,4 +13,5 @@ mod pg_server;
 mod postgres;
 mod restart;
 mod schema;
+mod store;
 mod submit;

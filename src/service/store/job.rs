@@ -125,6 +125,23 @@ pub struct ClaimedJob {
     pub case_json: String,
 }
 
+/// What a claim returns: [`COLUMNS`], then `case_json`.
+#[derive(sqlx::FromRow)]
+pub(super) struct RawClaim {
+    #[sqlx(flatten)]
+    job: RawJob,
+    case_json: String,
+}
+
+impl RawClaim {
+    pub(super) fn into_claimed(self) -> Result<ClaimedJob, sqlx::Error> {
+        Ok(ClaimedJob {
+            row: self.job.into_row()?,
+            case_json: self.case_json,
+        })
+    }
+}
+
 impl ClaimedJob {
     pub fn attempt(&self) -> i64 {
         self.row.attempts

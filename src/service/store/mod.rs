@@ -8,6 +8,19 @@
 //!
 //! Timestamps are RFC 3339 strings in UTC in both. Schemas are sqlx migrations
 //! (`migrations/sqlite`, `migrations/postgres`), applied when a store opens.
+//!
+//! [`JobStore`] is the one interface. A query both dialects accept is written once, in
+//! its method here, with `$1`-style parameters (sqlx's SQLite driver binds `$N` to the
+//! N-th value, as Postgres does), and compiled for each pool by `either!`. The stores'
+//! own modules hold only what differs: opening, claiming (Postgres: leases and
+//! `FOR UPDATE SKIP LOCKED`), SQLite's recovery at startup, Postgres's submission lock,
+//! cancellation flags and uploaded run files.
+//!
+//! A worker's writes (`set_started`, `set_progress`, `finish`) name the attempt that
+//! claimed the job and apply only while the job is `running` under that attempt. So the
+//! first recorded end stands: a late finish (a second write, an attempt that lost its
+//! lease, a process whose orphaned job was recovered) does not overwrite a job that was
+//! cancelled, failed by recovery or already finished; it returns `false`.
 
 mod job;
 mod postgres;
@@ -19,6 +32,7 @@ pub use job::{
 pub use postgres::PgStore;
 pub use sqlite::SqliteStore;
 
+use job::{RawJob, COLUMNS};
 use uuid::Uuid;
 
 #[derive(Debug, Clone)]
@@ -27,7 +41,9 @@ pub enum JobStore {
     Postgres(PgStore),
 }
 
-/// The same call on whichever database this is.
+/// The same code on whichever database this is: `$store` is the [`SqliteStore`] or the
+/// [`PgStore`], and `$call` is compiled once for each (a query's text and binds are
+/// written once, its pool's type differs).
 macro_rules! either {
     ($self:expr, $store:ident => $call:expr) => {
         match $self {
@@ -59,7 +75,7 @@ impl JobStore {
     }
 
     pub async fn close(&self) {
-        either!(self, s => s.close().await)
+        either!(self, s => s.pool.close().await)
     }
 
     /// SQLite: jobs left `running` by a previous process become `failed` /
@@ -81,7 +97,42 @@ impl JobStore {
         end_time: f64,
         capacity: usize,
     ) -> Result<Admission, sqlx::Error> {
-        either!(self, s => s.submit(id, name, case_json, end_time, capacity).await)
+        // one statement, so that concurrent submissions to a SQLite file cannot overfill
+        // the queue; Postgres also runs it under its submission lock, because there two
+        // statements at once count the queue without each other's insert
+        let sql = format!(
+            "INSERT INTO jobs (id, name, status, case_json, created_at, end_time)
+             SELECT $1, $2, 'queued', $3, $4, $5
+             WHERE (SELECT COUNT(*) FROM jobs WHERE status = 'queued') < $6
+             RETURNING {COLUMNS}"
+        );
+        let (id, now, capacity) = (id.to_string(), now_rfc3339(), capacity as i64);
+        macro_rules! insert_on {
+            ($executor:expr) => {
+                sqlx::query_as::<_, RawJob>(&sql)
+                    .bind(&id)
+                    .bind(name)
+                    .bind(case_json)
+                    .bind(&now)
+                    .bind(end_time)
+                    .bind(capacity)
+                    .fetch_optional($executor)
+                    .await?
+            };
+        }
+        let row = match self {
+            Self::Sqlite(s) => insert_on!(&s.pool),
+            Self::Postgres(s) => {
+                let mut tx = s.lock_submissions().await?;
+                let row = insert_on!(&mut *tx);
+                tx.commit().await?;
+                row
+            }
+        };
+        Ok(match row {
+            Some(r) => Admission::Accepted(Box::new(r.into_row()?)),
+            None => Admission::QueueFull,
+        })
     }
 
     /// Claim the oldest waiting job (marks it `running`, counts the attempt).
@@ -90,12 +141,25 @@ impl JobStore {
     }
 
     pub async fn get(&self, id: Uuid) -> Result<Option<JobRow>, sqlx::Error> {
-        either!(self, s => s.get(id).await)
+        let sql = format!("SELECT {COLUMNS} FROM jobs WHERE id = $1");
+        let raw: Option<RawJob> = either!(self, s => {
+            sqlx::query_as(&sql)
+                .bind(id.to_string())
+                .fetch_optional(&s.pool)
+                .await?
+        });
+        raw.map(RawJob::into_row).transpose()
     }
 
     /// The case text job `id` was submitted with.
     pub async fn case_text(&self, id: Uuid) -> Result<Option<String>, sqlx::Error> {
-        either!(self, s => s.case_text(id).await)
+        let sql = "SELECT case_json FROM jobs WHERE id = $1";
+        either!(self, s => {
+            sqlx::query_scalar(sql)
+                .bind(id.to_string())
+                .fetch_optional(&s.pool)
+                .await
+        })
     }
 
     /// Newest first, with the total matching `status`.
@@ -105,12 +169,46 @@ impl JobStore {
         limit: i64,
         offset: i64,
     ) -> Result<(Vec<JobRow>, i64), sqlx::Error> {
-        either!(self, s => s.list(status, limit, offset).await)
+        let filter = status.map(JobStatus::as_str);
+        let page = format!(
+            "SELECT {COLUMNS} FROM jobs WHERE ($1 IS NULL OR status = $1)
+             ORDER BY seq DESC LIMIT $2 OFFSET $3"
+        );
+        let count = "SELECT COUNT(*) FROM jobs WHERE ($1 IS NULL OR status = $1)";
+        let (rows, total): (Vec<RawJob>, i64) = either!(self, s => {
+            let rows = sqlx::query_as(&page)
+                .bind(filter)
+                .bind(limit)
+                .bind(offset)
+                .fetch_all(&s.pool)
+                .await?;
+            let total = sqlx::query_scalar(count)
+                .bind(filter)
+                .fetch_one(&s.pool)
+                .await?;
+            (rows, total)
+        });
+        let jobs = rows
+            .into_iter()
+            .map(RawJob::into_row)
+            .collect::<Result<_, _>>()?;
+        Ok((jobs, total))
     }
 
     /// Cancel a job that is still queued; `true` if it was.
     pub async fn cancel_if_queued(&self, id: Uuid) -> Result<bool, sqlx::Error> {
-        either!(self, s => s.cancel_if_queued(id).await)
+        let sql = "UPDATE jobs SET status = 'cancelled', reason = 'cancelled before it started',
+                 finished_at = $1
+             WHERE id = $2 AND status = 'queued'";
+        let done = either!(self, s => {
+            sqlx::query(sql)
+                .bind(now_rfc3339())
+                .bind(id.to_string())
+                .execute(&s.pool)
+                .await?
+                .rows_affected()
+        });
+        Ok(done == 1)
     }
 
     /// Postgres: flag a running job for its worker, wherever it runs. SQLite: nothing
@@ -144,13 +242,24 @@ impl JobStore {
         }
     }
 
+    /// The particle count of the attempt's run (once its case is built).
     pub async fn set_started(
         &self,
         id: Uuid,
         attempt: i64,
         particles: usize,
     ) -> Result<(), sqlx::Error> {
-        either!(self, s => s.set_started(id, attempt, particles).await)
+        let sql = "UPDATE jobs SET particles = $1
+             WHERE id = $2 AND attempts = $3 AND status = 'running'";
+        either!(self, s => {
+            sqlx::query(sql)
+                .bind(particles as i64)
+                .bind(id.to_string())
+                .bind(attempt)
+                .execute(&s.pool)
+                .await?;
+        });
+        Ok(())
     }
 
     pub async fn set_progress(
@@ -160,10 +269,23 @@ impl JobStore {
         step: u64,
         simulated_time: f64,
     ) -> Result<(), sqlx::Error> {
-        either!(self, s => s.set_progress(id, attempt, step, simulated_time).await)
+        let sql = "UPDATE jobs SET step = $1, simulated_time = $2
+             WHERE id = $3 AND attempts = $4 AND status = 'running'";
+        either!(self, s => {
+            sqlx::query(sql)
+                .bind(step as i64)
+                .bind(simulated_time)
+                .bind(id.to_string())
+                .bind(attempt)
+                .execute(&s.pool)
+                .await?;
+        });
+        Ok(())
     }
 
-    /// Record the end of an attempt; `false` when the attempt no longer held the job.
+    /// Record the end of an attempt; `false`, and nothing written, when the attempt no
+    /// longer holds the job: another attempt claimed it, or it has ended (finished,
+    /// cancelled, or failed by recovery or an expired lease), and that end stands.
     #[allow(clippy::too_many_arguments)]
     pub async fn finish(
         &self,
@@ -175,7 +297,24 @@ impl JobStore {
         step: u64,
         simulated_time: f64,
     ) -> Result<bool, sqlx::Error> {
-        either!(self, s => s.finish(id, attempt, status, reason, summary, step, simulated_time).await)
+        let sql = "UPDATE jobs SET status = $1, reason = $2, summary = $3, finished_at = $4,
+                 step = $5, simulated_time = $6
+             WHERE id = $7 AND attempts = $8 AND status = 'running'";
+        let done = either!(self, s => {
+            sqlx::query(sql)
+                .bind(status.as_str())
+                .bind(reason)
+                .bind(summary)
+                .bind(now_rfc3339())
+                .bind(step as i64)
+                .bind(simulated_time)
+                .bind(id.to_string())
+                .bind(attempt)
+                .execute(&s.pool)
+                .await?
+                .rows_affected()
+        });
+        Ok(done == 1)
     }
 
     /// A run file as the database holds it: `Some` with Postgres (possibly empty), `None`
@@ -189,6 +328,6 @@ impl JobStore {
 
     /// Cheap liveness check of the database.
     pub async fn ping(&self) -> Result<(), sqlx::Error> {
-        either!(self, s => s.ping().await)
+        either!(self, s => sqlx::query("SELECT 1").execute(&s.pool).await.map(|_| ()))
     }
 }

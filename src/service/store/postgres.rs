@@ -4,12 +4,14 @@
 //! up to the claimant's attempt limit. Every write of a worker names the attempt it
 //! holds, so a worker that lost its lease (killed, or cut off and still running) can
 //! no longer change the job. The run's CSV files live here too ([`PgStore::append_series`]).
+//! The queries both stores share are in [`super::JobStore`]; `finish` there leaves
+//! `lease_until` as it was, since a lease is read only while its job is `running`.
 
 use super::job::{
-    now_rfc3339, Admission, Claimant, ClaimedJob, JobRow, JobStatus, RawJob, Renewal,
-    ATTEMPTS_EXHAUSTED, COLUMNS,
+    now_rfc3339, Claimant, ClaimedJob, RawClaim, Renewal, ATTEMPTS_EXHAUSTED, COLUMNS,
 };
-use sqlx::postgres::{PgPool, PgPoolOptions};
+use sqlx::postgres::{PgPool, PgPoolOptions, Postgres};
+use sqlx::Transaction;
 use std::time::Duration;
 use uuid::Uuid;
 
@@ -19,7 +21,7 @@ const SUBMIT_LOCK: i64 = 0x6d70_7366_7369;
 
 #[derive(Debug, Clone)]
 pub struct PgStore {
-    pool: PgPool,
+    pub(super) pool: PgPool,
 }
 
 impl PgStore {
@@ -35,42 +37,15 @@ impl PgStore {
         Ok(Self { pool })
     }
 
-    pub async fn close(&self) {
-        self.pool.close().await;
-    }
-
-    pub async fn submit(
-        &self,
-        id: Uuid,
-        name: &str,
-        case_json: &str,
-        end_time: f64,
-        capacity: usize,
-    ) -> Result<Admission, sqlx::Error> {
+    /// A transaction holding the submission lock: [`super::JobStore::submit`] counts the
+    /// queue and inserts in it.
+    pub(super) async fn lock_submissions(&self) -> Result<Transaction<'_, Postgres>, sqlx::Error> {
         let mut tx = self.pool.begin().await?;
         sqlx::query("SELECT pg_advisory_xact_lock($1)")
             .bind(SUBMIT_LOCK)
             .execute(&mut *tx)
             .await?;
-        let row: Option<RawJob> = sqlx::query_as(&format!(
-            "INSERT INTO jobs (id, name, status, case_json, created_at, end_time)
-             SELECT $1, $2, 'queued', $3, $4, $5
-             WHERE (SELECT COUNT(*) FROM jobs WHERE status = 'queued') < $6
-             RETURNING {COLUMNS}"
-        ))
-        .bind(id.to_string())
-        .bind(name)
-        .bind(case_json)
-        .bind(now_rfc3339())
-        .bind(end_time)
-        .bind(capacity as i64)
-        .fetch_optional(&mut *tx)
-        .await?;
-        tx.commit().await?;
-        Ok(match row {
-            Some(r) => Admission::Accepted(Box::new(r.into_row()?)),
-            None => Admission::QueueFull,
-        })
+        Ok(tx)
     }
 
     /// End the jobs whose lease expired and that must not run again (cancel requested,
@@ -90,7 +65,7 @@ impl PgStore {
         .bind(i64::from(by.max_attempts))
         .execute(&mut *tx)
         .await?;
-        let claimed: Option<(String, String)> = sqlx::query_as(
+        let claimed: Option<RawClaim> = sqlx::query_as(&format!(
             "WITH next AS (
                  SELECT seq FROM jobs
                  WHERE status = 'queued' OR (status = 'running' AND lease_until < now())
@@ -100,31 +75,25 @@ impl PgStore {
                  lease_until = now() + make_interval(secs => $4),
                  step = 0, simulated_time = 0, particles = NULL
              FROM next WHERE jobs.seq = next.seq
-             RETURNING jobs.id, jobs.case_json",
-        )
+             RETURNING {COLUMNS}, case_json"
+        ))
         .bind(now_rfc3339())
         .bind(&by.worker)
         .bind(&by.jobs_dir)
         .bind(by.lease_s)
         .fetch_optional(&mut *tx)
         .await?;
-        let Some((id, case_json)) = claimed else {
+        let Some(claimed) = claimed else {
             tx.commit().await?;
             return Ok(None);
         };
+        let claimed = claimed.into_claimed()?;
         sqlx::query("DELETE FROM job_series WHERE job_id = $1")
-            .bind(&id)
+            .bind(claimed.row.id.to_string())
             .execute(&mut *tx)
             .await?;
-        let raw: RawJob = sqlx::query_as(&format!("SELECT {COLUMNS} FROM jobs WHERE id = $1"))
-            .bind(&id)
-            .fetch_one(&mut *tx)
-            .await?;
         tx.commit().await?;
-        Ok(Some(ClaimedJob {
-            row: raw.into_row()?,
-            case_json,
-        }))
+        Ok(Some(claimed))
     }
 
     /// Extend the lease of the attempt held; also reports a cancellation request.
@@ -163,63 +132,6 @@ impl PgStore {
         Ok(done.rows_affected() == 1)
     }
 
-    pub async fn get(&self, id: Uuid) -> Result<Option<JobRow>, sqlx::Error> {
-        let raw: Option<RawJob> =
-            sqlx::query_as(&format!("SELECT {COLUMNS} FROM jobs WHERE id = $1"))
-                .bind(id.to_string())
-                .fetch_optional(&self.pool)
-                .await?;
-        raw.map(RawJob::into_row).transpose()
-    }
-
-    pub async fn case_text(&self, id: Uuid) -> Result<Option<String>, sqlx::Error> {
-        let row: Option<(String,)> = sqlx::query_as("SELECT case_json FROM jobs WHERE id = $1")
-            .bind(id.to_string())
-            .fetch_optional(&self.pool)
-            .await?;
-        Ok(row.map(|(text,)| text))
-    }
-
-    pub async fn list(
-        &self,
-        status: Option<JobStatus>,
-        limit: i64,
-        offset: i64,
-    ) -> Result<(Vec<JobRow>, i64), sqlx::Error> {
-        let filter = status.map(|s| s.as_str());
-        let rows: Vec<RawJob> = sqlx::query_as(&format!(
-            "SELECT {COLUMNS} FROM jobs WHERE ($1::text IS NULL OR status = $1)
-             ORDER BY seq DESC LIMIT $2 OFFSET $3"
-        ))
-        .bind(filter)
-        .bind(limit)
-        .bind(offset)
-        .fetch_all(&self.pool)
-        .await?;
-        let total: i64 =
-            sqlx::query_scalar("SELECT COUNT(*) FROM jobs WHERE ($1::text IS NULL OR status = $1)")
-                .bind(filter)
-                .fetch_one(&self.pool)
-                .await?;
-        let jobs = rows
-            .into_iter()
-            .map(RawJob::into_row)
-            .collect::<Result<_, _>>()?;
-        Ok((jobs, total))
-    }
-
-    pub async fn cancel_if_queued(&self, id: Uuid) -> Result<bool, sqlx::Error> {
-        let done = sqlx::query(
-            "UPDATE jobs SET status = 'cancelled', reason = 'cancelled before it started', finished_at = $1
-             WHERE id = $2 AND status = 'queued'",
-        )
-        .bind(now_rfc3339())
-        .bind(id.to_string())
-        .execute(&self.pool)
-        .await?;
-        Ok(done.rows_affected() == 1)
-    }
-
     /// Flag a running job; its worker sees the flag at its next lease renewal.
     pub async fn request_cancel(&self, id: Uuid) -> Result<(), sqlx::Error> {
         sqlx::query("UPDATE jobs SET cancel_requested = TRUE WHERE id = $1 AND status = 'running'")
@@ -227,72 +139,6 @@ impl PgStore {
             .execute(&self.pool)
             .await?;
         Ok(())
-    }
-
-    pub async fn set_started(
-        &self,
-        id: Uuid,
-        attempt: i64,
-        particles: usize,
-    ) -> Result<(), sqlx::Error> {
-        sqlx::query(
-            "UPDATE jobs SET particles = $1 WHERE id = $2 AND attempts = $3 AND status = 'running'",
-        )
-        .bind(particles as i64)
-        .bind(id.to_string())
-        .bind(attempt)
-        .execute(&self.pool)
-        .await?;
-        Ok(())
-    }
-
-    pub async fn set_progress(
-        &self,
-        id: Uuid,
-        attempt: i64,
-        step: u64,
-        simulated_time: f64,
-    ) -> Result<(), sqlx::Error> {
-        sqlx::query(
-            "UPDATE jobs SET step = $1, simulated_time = $2
-             WHERE id = $3 AND attempts = $4 AND status = 'running'",
-        )
-        .bind(step as i64)
-        .bind(simulated_time)
-        .bind(id.to_string())
-        .bind(attempt)
-        .execute(&self.pool)
-        .await?;
-        Ok(())
-    }
-
-    #[allow(clippy::too_many_arguments)]
-    pub async fn finish(
-        &self,
-        id: Uuid,
-        attempt: i64,
-        status: JobStatus,
-        reason: Option<&str>,
-        summary: Option<&str>,
-        step: u64,
-        simulated_time: f64,
-    ) -> Result<bool, sqlx::Error> {
-        let done = sqlx::query(
-            "UPDATE jobs SET status = $1, reason = $2, summary = $3, finished_at = $4, step = $5,
-                 simulated_time = $6, lease_until = NULL
-             WHERE id = $7 AND attempts = $8 AND status = 'running'",
-        )
-        .bind(status.as_str())
-        .bind(reason)
-        .bind(summary)
-        .bind(now_rfc3339())
-        .bind(step as i64)
-        .bind(simulated_time)
-        .bind(id.to_string())
-        .bind(attempt)
-        .execute(&self.pool)
-        .await?;
-        Ok(done.rows_affected() == 1)
     }
 
     /// Append complete lines of a run file at `offset`; `false` when the attempt no
@@ -330,12 +176,5 @@ impl PgStore {
         .fetch_all(&self.pool)
         .await?;
         Ok(chunks.into_iter().flat_map(|(c,)| c).collect())
-    }
-
-    pub async fn ping(&self) -> Result<(), sqlx::Error> {
-        sqlx::query("SELECT 1")
-            .execute(&self.pool)
-            .await
-            .map(|_| ())
     }
 }
