@@ -8,9 +8,9 @@
 //! the small-viscosity limit of the exact linear rate of Lamb §349 (0.700 1/s here,
 //! nu k²/omega = 0.025); the test compares with the exact one and reports both.
 //!
-//! It reads 0.649 1/s (-7.3 %) and omega 7.79 (-0.5 %) with the default strain-rate
-//! viscous term; the Laplacian form decays at 0.459 (-34 %): its dissipation at a free
-//! surface is half the physical one.
+//! What the default strain-rate viscous term and the Laplacian form read is in
+//! docs/validation.md; the Laplacian form's dissipation at a free surface is half the
+//! physical one.
 
 use super::shipped_case;
 use mpsfsi::analysis::measure::{exponential_decay_rate, oscillation_peaks};
