@@ -1,4 +1,4 @@
-//! Verification of the operator family against the papers of docs/references.md 
+//! Verification of the operator family against the papers of docs/references.md
 //! Each module reproduces one paper's test and asserts the paper's stated behaviour.
 
 mod convergence;
