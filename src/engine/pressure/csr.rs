@@ -95,6 +95,86 @@ impl CsrMatrix {
     }
 }
 
+/// Where one chunk of rows writes its entries: a slice of the matrix's own buffers sized
+/// for the chunk's bound, filled from the start (`len` entries so far). A write is two
+/// stores and a counter kept in a register, where `Vec::push` checks the capacity and
+/// stores the length back on every entry.
+pub struct Entries<'a> {
+    pub cols: &'a mut [u32],
+    pub vals: &'a mut [Real],
+    pub len: usize,
+}
+
+impl Entries<'_> {
+    #[inline(always)]
+    pub fn push(&mut self, col: u32, val: Real) {
+        self.cols[self.len] = col;
+        self.vals[self.len] = val;
+        self.len += 1;
+    }
+}
+
+impl CsrMatrix {
+    /// Fill this matrix with rows written chunk by chunk, in parallel, straight into its
+    /// own buffers (reused from the last fill: no second copy of the matrix alive and no
+    /// zeroing at a steady size). Chunk `c` may write at most `bounds[c]` entries;
+    /// `write(c, entries)` writes its rows in order and returns each row's length and
+    /// whatever else it computed. The chunks' entries are then moved down over the unused
+    /// space of their bounds, in order. Deterministic: the entries and their order do not
+    /// depend on the thread count.
+    pub fn fill_in_place<T: Send>(
+        &mut self,
+        bounds: &[usize],
+        write: impl Fn(usize, &mut Entries) -> (Vec<u32>, T) + Sync,
+    ) -> Vec<T> {
+        let total: usize = bounds.iter().sum();
+        if self.col.len() < total {
+            // a larger matrix than any before: new buffers, nothing to keep
+            self.col.clear();
+            self.val.clear();
+            self.col.resize(total, 0);
+            self.val.resize(total, 0.0);
+        }
+        let mut slices = Vec::with_capacity(bounds.len());
+        let (mut cols, mut vals) = (&mut self.col[..total], &mut self.val[..total]);
+        for &b in bounds {
+            let (c, rest_c) = cols.split_at_mut(b);
+            let (v, rest_v) = vals.split_at_mut(b);
+            slices.push((c, v));
+            (cols, vals) = (rest_c, rest_v);
+        }
+        let parts: Vec<(Vec<u32>, T)> = slices
+            .into_par_iter()
+            .enumerate()
+            .map(|(c, (cols, vals))| {
+                let mut out = Entries { cols, vals, len: 0 };
+                let (lens, extra) = write(c, &mut out);
+                debug_assert_eq!(lens.iter().map(|&l| l as usize).sum::<usize>(), out.len);
+                (lens, extra)
+            })
+            .collect();
+        self.row_ptr.clear();
+        self.row_ptr.push(0);
+        let (mut src, mut dst) = (0, 0);
+        for ((lens, _), &bound) in parts.iter().zip(bounds) {
+            let start = dst;
+            for &l in lens {
+                dst += l as usize;
+                self.row_ptr.push(dst);
+            }
+            if src != start {
+                self.col.copy_within(src..src + (dst - start), start);
+                self.val.copy_within(src..src + (dst - start), start);
+            }
+            src += bound;
+        }
+        self.n = self.row_ptr.len() - 1;
+        self.col.truncate(dst);
+        self.val.truncate(dst);
+        parts.into_iter().map(|(_, extra)| extra).collect()
+    }
+}
+
 /// Rows of a matrix computed chunk by chunk: their lengths, columns and values.
 #[derive(Debug, Default)]
 pub struct RowChunk {
@@ -175,6 +255,44 @@ mod tests {
             lens: lens.to_vec(),
             cols: (first_col..first_col + nnz).collect(),
             vals: (first_col..first_col + nnz).map(Real::from).collect(),
+        }
+    }
+
+    /// Rows written in place give the same matrix as the same rows copied from chunks,
+    /// whatever the buffers held before and however short of its bound each chunk fell.
+    #[test]
+    fn fill_in_place_gives_the_rows_in_order() {
+        // chunk c writes rows of lengths lens[c], entry k of the whole matrix = k
+        let lens: [&[u32]; 4] = [&[2, 0, 1], &[3], &[], &[1, 1]];
+        let bounds = [5, 3, 2, 4];
+        let first: Vec<usize> = lens
+            .iter()
+            .scan(0, |k, l| {
+                let f = *k;
+                *k += l.iter().sum::<u32>() as usize;
+                Some(f)
+            })
+            .collect();
+        for old in [0usize, 4, 100] {
+            let mut m = CsrMatrix {
+                n: old,
+                row_ptr: vec![7; old + 1],
+                col: vec![9; old],
+                val: vec![-1.0; old],
+            };
+            let extra = m.fill_in_place(&bounds, |c, out| {
+                let n: u32 = lens[c].iter().sum();
+                for k in 0..n as usize {
+                    let e = first[c] + k;
+                    out.push(e as u32, e as Real);
+                }
+                (lens[c].to_vec(), c)
+            });
+            assert_eq!(extra, [0, 1, 2, 3]);
+            assert_eq!(m.n, 6);
+            assert_eq!(m.row_ptr, [0, 2, 2, 3, 6, 7, 8]);
+            assert_eq!(m.col, [0, 1, 2, 3, 4, 5, 6, 7]);
+            assert_eq!(m.val, [0.0, 1.0, 2.0, 3.0, 4.0, 5.0, 6.0, 7.0]);
         }
     }
 

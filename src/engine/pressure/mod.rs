@@ -12,7 +12,7 @@ mod pcg;
 mod reuse;
 
 pub use amg::Amg;
-pub use csr::{concat_into, CsrMatrix, RowChunk};
+pub use csr::{concat_into, CsrMatrix, Entries, RowChunk};
 pub use gmres::gmres;
 pub use pcg::{bicgstab, conjugate_gradient, Preconditioner};
 pub use reuse::{
