@@ -1,4 +1,4 @@
-//! Rigid bodies and fluid–structure coupling (issue 3): the rapier coupling, the
+//! Rigid bodies and fluid–structure coupling: the rapier coupling, the
 //! added-mass stabilisation, body walls in the number density, buoyancy, flotation
 //! and the slamming load of a wedge against the similarity solution.
 
@@ -9,4 +9,5 @@ mod hydrostatics;
 mod impact;
 mod plate_impulse;
 mod probe;
+mod replay;
 mod wedge;
