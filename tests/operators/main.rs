@@ -1,5 +1,6 @@
 //! Verification of the operator family against the papers of docs/references.md
-//! Each module reproduces one paper's test and asserts the paper's stated behaviour.
+//! Each module reproduces one paper's test and asserts the paper's stated behaviour, or
+//! checks an operator that the step calls against analytic values (`vector_laplacian`).
 
 mod convergence;
 mod diffusion;
@@ -8,3 +9,4 @@ mod engine_variants;
 mod manufactured_ppe;
 mod rows;
 mod spacing_1d;
+mod vector_laplacian;

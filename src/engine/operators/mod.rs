@@ -22,6 +22,7 @@ mod gradient;
 mod laplacian;
 mod moments;
 mod second_derivatives;
+mod vector_laplacian;
 
 pub use density::{number_density_and_divergence, number_density_and_divergence_all};
 pub use divergence::divergence;
@@ -34,6 +35,7 @@ pub use moments::LatticeConstants;
 pub use second_derivatives::{
     anisotropic_second_derivatives, second_derivatives, SecondDerivatives,
 };
+pub use vector_laplacian::{vector_laplacian_sum, vector_laplacian_sums};
 
 use super::neighbors::NeighborList;
 use super::resolution::Scales;
@@ -51,8 +53,9 @@ pub struct Cloud<'a> {
     /// the x axis).
     pub dim: Real,
     /// Multi-resolution spacings: the step's operators (number density, HS divergence,
-    /// the lattice Laplacian rows, the pressure gradient) take each pair's radius and
-    /// volume factor from them; the other operators are single-resolution.
+    /// the lattice Laplacian rows and the vector Laplacian, the pressure gradient) take
+    /// each pair's radius and volume factor from them; the other operators are
+    /// single-resolution.
     pub scales: Scales<'a>,
 }
 

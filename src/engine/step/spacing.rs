@@ -1,8 +1,10 @@
 //! Spacing control after the correction: velocity filter, sponge layers, the collision
 //! and wall-repulsion safety net, particle shifting.
 
+use crate::case::ViscosityKind;
 use crate::engine::config::SpacingControl;
 use crate::engine::kernel::Kernel;
+use crate::engine::operators::{vector_laplacian_sums, Cloud};
 use crate::engine::simulation::{Simulation, WallLoad};
 use crate::engine::walls::{moment_about, PlacedWall};
 use crate::math::{Real, Vec2};
@@ -100,38 +102,25 @@ pub(super) fn keep_particles_apart(
 }
 
 /// The velocity filter (`scheme.velocity_filter`): u_i += eps Σ_j w_ij (u_j - u_i) / n0
-/// over the fluid neighbours at x*. The pair weights are symmetric, so the fluid's
+/// over the fluid neighbours at x* (the pair sum of the classic vector Laplacian at r_e,
+/// `operators::vector_laplacian_sums`). The pair weights are symmetric, so the fluid's
 /// momentum is unchanged; a smooth field changes by O(eps l0² ∇²u) per step, while the
 /// odd-even mode (neighbours moving in opposite directions, invisible to the divergence
 /// of the PPE source and to the gradient) loses a share of order eps every step.
 pub(super) fn filter_velocity<K: Kernel>(sim: &mut Simulation, eps: Real) {
     let (re, n0) = (sim.config.params.re, sim.config.params.n0);
-    let scales = sim.scales();
-    let (x, u, nb) = (
-        &sim.workspace.scratch.x_star,
+    let x = &sim.workspace.scratch.x_star;
+    let nb = &sim.workspace.neighbors;
+    // a particle created after the last neighbour search has no list and no change
+    let cloud = Cloud::new(&x[..nb.len().min(x.len())], nb, re).with_scales(sim.scales());
+    let sums = vector_laplacian_sums::<K>(
+        true,
+        ViscosityKind::Laplacian,
+        &cloud,
         &sim.particles.velocity,
-        &sim.workspace.neighbors,
     );
-    let du: Vec<Vec2> = (0..u.len())
-        .into_par_iter()
-        .map(|i| {
-            if i >= nb.len() {
-                return Vec2::zeros();
-            }
-            let mut s = Vec2::zeros();
-            for &j in nb.of(i) {
-                let j = j as usize;
-                let d = (x[j] - x[i]).norm();
-                let (sij, v) = scales.pair(i, j);
-                if d < re * sij && d > 0.0 {
-                    s += (u[j] - u[i]) * (K::w(d, re * sij) * v);
-                }
-            }
-            s * (eps / n0)
-        })
-        .collect();
-    for (ui, d) in sim.particles.velocity.iter_mut().zip(du) {
-        *ui += d;
+    for (i, ui) in sim.particles.velocity.iter_mut().enumerate() {
+        *ui += sums.get(i).map_or(Vec2::zeros(), |s| s * (eps / n0));
     }
 }
 

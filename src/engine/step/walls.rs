@@ -28,6 +28,14 @@ impl<K: Kernel> KernelWeights<K> {
             _k: PhantomData,
         }
     }
+
+    /// Whether the Laplacian weight is w (classic and second-order Laplacians) rather
+    /// than the HL weight w'' - w'/r.
+    #[inline]
+    pub(super) fn classic_laplacian(&self) -> bool {
+        self.classic_laplacian
+    }
+
     #[inline]
     pub(super) fn laplacian(&self, r: Real) -> Real {
         self.laplacian_scaled(r, 1.0)
