@@ -261,6 +261,15 @@ pub fn pressure_gradient<K: Kernel>(
     }
 }
 
+/// The first moment of particle i's fluid neighbourhood, M1 = Σ_j r_ij w / r² v_ij over
+/// 0 < r < r_e s_ij: zero inside a full lattice, pointing into the fluid where the
+/// neighbourhood is one-sided (the free-surface test's asymmetry, Sun et al. 2022 §2.3;
+/// the walls' share is `WallTerms::moment1`).
+#[inline]
+pub fn first_moment<K: Kernel>(cloud: &Cloud, i: usize) -> Vec2 {
+    weighted_sum::<K>(cloud, i, |_| 1.0)
+}
+
 /// The virtual wall points' sums of one particle: Σ M2 c and Σ M1 (M2 goes into the
 /// caller's moment matrix, after the fluid pairs).
 struct WallSums {

@@ -4,7 +4,9 @@
 use crate::case::ViscosityKind;
 use crate::engine::config::SpacingControl;
 use crate::engine::kernel::Kernel;
-use crate::engine::operators::{vector_laplacian_sums, Cloud};
+use crate::engine::operators::{
+    collision_velocity_changes, number_density_gradient, vector_laplacian_sums, Cloud,
+};
 use crate::engine::simulation::{Simulation, WallLoad};
 use crate::engine::walls::{moment_about, PlacedWall};
 use crate::math::{Real, Vec2};
@@ -23,38 +25,14 @@ pub(super) fn keep_particles_apart(
     let m = sim.config.params.particle_mass;
     let n = sim.particles.len();
     if let SpacingControl::Collision { distance } = sim.config.method.spacing_control {
-        let rc = distance * l0;
-        let scales = sim.scales();
-        let (x, u, nb) = (
+        // the collision distance is the cloud's radius
+        let cloud = Cloud::new(
             &sim.particles.position,
-            &sim.particles.velocity,
             &sim.workspace.neighbors,
-        );
-        let du: Vec<Vec2> = (0..n)
-            .into_par_iter()
-            .map(|i| {
-                let mut d = Vec2::zeros();
-                for &j in nb.of(i) {
-                    let j = j as usize;
-                    let r = x[j] - x[i];
-                    let rc = rc * scales.pair(i, j).0;
-                    // most pairs are well apart: skip them without the square root (the
-                    // margin keeps the test below the one that decides)
-                    if r.norm_squared() > rc * rc * (1.0 + 1e-9) {
-                        continue;
-                    }
-                    let dist = r.norm();
-                    if dist < rc && dist > 0.0 {
-                        let rh = r / dist;
-                        let vn = (u[j] - u[i]).dot(&rh);
-                        if vn < 0.0 {
-                            d += rh * (0.5 * (1.0 + e) * vn);
-                        }
-                    }
-                }
-                d
-            })
-            .collect();
+            distance * l0,
+        )
+        .with_scales(sim.scales());
+        let du = collision_velocity_changes(&cloud, &sim.particles.velocity, e);
         let parts = &mut sim.particles;
         parts
             .velocity
@@ -137,31 +115,17 @@ pub(super) fn shift_particles<K: Kernel>(sim: &mut Simulation, a: Real) {
         sim.config.params.n0,
     );
     let scales = sim.scales();
-    let (x, nb, contacts, surface) = (
-        &sim.particles.position,
-        &sim.workspace.neighbors,
-        &sim.workspace.contacts,
-        &sim.particles.free_surface,
-    );
-    let shift: Vec<Vec2> = (0..x.len())
+    let (contacts, surface) = (&sim.workspace.contacts, &sim.particles.free_surface);
+    let cloud =
+        Cloud::new(&sim.particles.position, &sim.workspace.neighbors, re).with_scales(scales);
+    let shift: Vec<Vec2> = (0..cloud.len())
         .into_par_iter()
         .map(|i| {
-            let mut grad = Vec2::zeros();
-            let mut near_surface = surface[i];
-            for &j in nb.of(i) {
-                let j = j as usize;
-                let r = x[i] - x[j];
-                let d = r.norm();
-                let (s, v) = scales.pair(i, j);
-                if d >= re * s || d == 0.0 {
-                    continue;
-                }
-                grad += r * (K::dw(d, re * s) / d * v);
-                near_surface |= surface[j];
-            }
+            let mut grad = number_density_gradient::<K>(&cloud, i);
             for c in contacts.of(i) {
                 grad += c.terms.number_density_gradient;
             }
+            let near_surface = surface[i] || cloud.any_within(i, |j| surface[j]);
             let l0 = l0 * scales.of(i);
             let mut dr = grad * (-a * l0 * l0 / n0);
             if near_surface {
