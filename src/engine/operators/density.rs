@@ -3,7 +3,8 @@
 //! only: a wall adds its own shares (`WallContacts::number_density`,
 //! `WallContacts::add_divergence`). The step needs both at the same positions, so they
 //! come from one pass over each neighbourhood. Beside them: the gradient of n (particle
-//! shifting) and the neighbour count.
+//! shifting), the HS divergence in row form (the exact projection) and the neighbour
+//! count.
 
 use super::Cloud;
 use crate::engine::kernel::Kernel;
@@ -67,6 +68,27 @@ pub fn number_density_gradient<K: Kernel>(cloud: &Cloud, i: usize) -> Vec2 {
         grad += r * (K::dw(d, re) / d * v);
     }
     grad
+}
+
+/// The HS divergence of particle i in row form for repeated application, ⟨∇·u⟩_i =
+/// Σ_j e_ij·u_ij with e_ij = -c w'(r) r_ij / r v_ij over the neighbours with
+/// 0 < r < r_e s_ij: the divergence of [`number_density_and_divergence`], its arithmetic
+/// grouped per pair (the two agree to round-off; the exact projection applies these rows
+/// at every GMRES iteration).
+pub fn hs_divergence_row<K: Kernel>(cloud: &Cloud, c: Real, i: usize) -> Vec<(usize, Vec2)> {
+    let x = cloud.positions;
+    cloud
+        .neighbors
+        .of(i)
+        .iter()
+        .filter_map(|&j| {
+            let j = j as usize;
+            let r = x[j] - x[i];
+            let d = r.norm();
+            let (re, v) = cloud.pair(i, j);
+            (d > 0.0 && d < re).then(|| (j, r * (-c * K::dw(d, re) / d * v)))
+        })
+        .collect()
 }
 
 /// The number of fluid neighbours of particle i within r_e s_ij (a coincident one

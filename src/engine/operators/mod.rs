@@ -27,15 +27,17 @@ mod vector_laplacian;
 
 pub use collision::{collision_velocity_change, collision_velocity_changes};
 pub use density::{
-    neighbour_count, number_density_and_divergence, number_density_and_divergence_all,
-    number_density_gradient,
+    hs_divergence_row, neighbour_count, number_density_and_divergence,
+    number_density_and_divergence_all, number_density_gradient,
 };
 pub use divergence::divergence;
 pub use gradient::{
-    corrected_gradient_matrix, first_moment, gradient, gradient_row, minimum_over_neighbourhood,
-    pressure_gradient, GradientRow, PressureGradient, VirtualPoints,
+    corrected_gradient_matrix, corrected_gradient_row, first_moment, gradient, gradient_row,
+    minimum_over_neighbourhood, pressure_gradient, GradientRow, PressureGradient, VirtualPoints,
 };
-pub use laplacian::{for_each_lattice_coefficient, laplacian, laplacian_row, LaplacianRow};
+pub use laplacian::{
+    for_each_lattice_coefficient, has_laplacian_neighbour, laplacian, laplacian_row, LaplacianRow,
+};
 pub use moments::LatticeConstants;
 pub use second_derivatives::{
     anisotropic_second_derivatives, second_derivatives, SecondDerivatives,
@@ -59,7 +61,7 @@ pub struct Cloud<'a> {
     pub dim: Real,
     /// Multi-resolution spacings: the operators the step calls (number density and its
     /// gradient, HS divergence, the lattice Laplacian rows and the vector Laplacian, the
-    /// pressure gradient, the first moment, the
+    /// pressure gradient and the corrected gradient's rows, the first moment, the
     /// collision pass, the neighbourhood queries) take each pair's radius and volume
     /// factor from them; the other operators are single-resolution.
     pub scales: Scales<'a>,

@@ -36,18 +36,13 @@ impl<K: Kernel> KernelWeights<K> {
         self.classic_laplacian
     }
 
+    /// The wall lattice's Laplacian weight at distance r.
     #[inline]
     pub(super) fn laplacian(&self, r: Real) -> Real {
-        self.laplacian_scaled(r, 1.0)
-    }
-
-    /// The Laplacian weight of a pair with radius multiple `s` (s_ij of `resolution`).
-    #[inline]
-    pub(super) fn laplacian_scaled(&self, r: Real, s: Real) -> Real {
         if self.classic_laplacian {
-            K::w(r, self.re_lap * s)
+            K::w(r, self.re_lap)
         } else {
-            K::hl(r, self.re_lap * s)
+            K::hl(r, self.re_lap)
         }
     }
 }
