@@ -2,7 +2,9 @@
 //! eq. 4) and the HS divergence of the velocity (Ikari, Khayyer & Gotoh 2015 eq. 2), fluid neighbours
 //! only: a wall adds its own shares (`WallContacts::number_density`,
 //! `WallContacts::add_divergence`). The step needs both at the same positions, so they
-//! come from one pass over each neighbourhood.
+//! come from one pass over each neighbourhood. Beside them: the gradient of n (particle
+//! shifting), the HS divergence in row form (the exact projection) and the neighbour
+//! count.
 
 use super::Cloud;
 use crate::engine::kernel::Kernel;
@@ -45,4 +47,59 @@ pub fn number_density_and_divergence_all<K: Kernel>(
         .into_par_iter()
         .map(|i| number_density_and_divergence::<K>(cloud, u, c, i))
         .unzip()
+}
+
+/// ∇n_i = Σ_j ∇_i w(r_ij) = Σ_j w'(r) (x_i - x_j) / r v_ij over the fluid neighbours with
+/// 0 < r < r_e s_ij: it points from sparse to crowded places (the walls' share is
+/// `WallTerms::number_density_gradient`). Fickian shifting moves particles down it
+/// (Lind et al. 2012).
+#[inline]
+pub fn number_density_gradient<K: Kernel>(cloud: &Cloud, i: usize) -> Vec2 {
+    let x = cloud.positions;
+    let mut grad = Vec2::zeros();
+    for &j in cloud.neighbors.of(i) {
+        let j = j as usize;
+        let r = x[i] - x[j];
+        let d = r.norm();
+        let (re, v) = cloud.pair(i, j);
+        if d >= re || d == 0.0 {
+            continue;
+        }
+        grad += r * (K::dw(d, re) / d * v);
+    }
+    grad
+}
+
+/// The HS divergence of particle i in row form for repeated application, ⟨∇·u⟩_i =
+/// Σ_j e_ij·u_ij with e_ij = -c w'(r) r_ij / r v_ij over the neighbours with
+/// 0 < r < r_e s_ij: the divergence of [`number_density_and_divergence`], its arithmetic
+/// grouped per pair (the two agree to round-off; the exact projection applies these rows
+/// at every GMRES iteration).
+pub fn hs_divergence_row<K: Kernel>(cloud: &Cloud, c: Real, i: usize) -> Vec<(usize, Vec2)> {
+    let x = cloud.positions;
+    cloud
+        .neighbors
+        .of(i)
+        .iter()
+        .filter_map(|&j| {
+            let j = j as usize;
+            let r = x[j] - x[i];
+            let d = r.norm();
+            let (re, v) = cloud.pair(i, j);
+            (d > 0.0 && d < re).then(|| (j, r * (-c * K::dw(d, re) / d * v)))
+        })
+        .collect()
+}
+
+/// The number of fluid neighbours of particle i within r_e s_ij (a coincident one
+/// included): Σ_j 1, the number density of a unit weight.
+#[inline]
+pub fn neighbour_count(cloud: &Cloud, i: usize) -> usize {
+    let x = cloud.positions;
+    cloud
+        .neighbors
+        .of(i)
+        .iter()
+        .filter(|&&j| (x[j as usize] - x[i]).norm() < cloud.pair(i, j as usize).0)
+        .count()
 }

@@ -261,6 +261,42 @@ pub fn pressure_gradient<K: Kernel>(
     }
 }
 
+/// The corrected gradient of particle i in row form, ⟨∇p⟩_i = Σ_j g_ij (p_j - p_i) + b_i
+/// (Ikari, Khayyer & Gotoh 2015 eqs. 12-13): g_ij = C r_ij w / r² v_ij / n0 with C over
+/// the fluid and the virtual wall points' moments (`walls`, as in [`pressure_gradient`]),
+/// and b_i = C Σ M2 c / n0 the virtual points' Neumann part; where C is degenerate
+/// ([`corrected_gradient_matrix`]) the classic normalisation `classic` (d/n0) replaces
+/// C / n0. Returns ((j, g_ij) for the neighbours within r_e s_ij, b_i). The exact
+/// projection applies these rows at every GMRES iteration.
+pub fn corrected_gradient_row<K: Kernel>(
+    cloud: &Cloud,
+    n0: Real,
+    classic: Real,
+    i: usize,
+    walls: impl Iterator<Item = VirtualPoints>,
+) -> (GradientRow, Vec2) {
+    let mut moment = Mat2::zeros();
+    let mut raw = Vec::with_capacity(cloud.neighbors.of(i).len());
+    for_each_pair::<K>(cloud, i, |j, r, w, _, _| {
+        moment += r * r.transpose() * w;
+        raw.push((j, r * w));
+    });
+    let wall = WallSums::of(walls, &mut moment);
+    let scale = corrected_gradient_matrix(&moment, n0, cloud.dim)
+        .map_or(Mat2::identity() * classic, |c| c / n0);
+    let row = raw.into_iter().map(|(j, g)| (j, scale * g)).collect();
+    (row, scale * wall.linear)
+}
+
+/// The first moment of particle i's fluid neighbourhood, M1 = Σ_j r_ij w / r² v_ij over
+/// 0 < r < r_e s_ij: zero inside a full lattice, pointing into the fluid where the
+/// neighbourhood is one-sided (the free-surface test's asymmetry, Sun et al. 2022 §2.3;
+/// the walls' share is `WallTerms::moment1`).
+#[inline]
+pub fn first_moment<K: Kernel>(cloud: &Cloud, i: usize) -> Vec2 {
+    weighted_sum::<K>(cloud, i, |_| 1.0)
+}
+
 /// The virtual wall points' sums of one particle: Σ M2 c and Σ M1 (M2 goes into the
 /// caller's moment matrix, after the fluid pairs).
 struct WallSums {

@@ -87,6 +87,20 @@ pub fn for_each_lattice_coefficient<K: Kernel>(
     }
 }
 
+/// Whether particle i has a neighbour with a non-zero weight in the symmetric rows of
+/// [`for_each_lattice_coefficient`] (L = w when `classic`, else the HL weight, at the
+/// pair's radius r_e s_ij): a particle without one has an empty Laplacian row. Stops at
+/// the first such neighbour.
+#[inline]
+pub fn has_laplacian_neighbour<K: Kernel>(classic: bool, cloud: &Cloud, i: usize) -> bool {
+    let x = cloud.positions;
+    let weight = if classic { K::w } else { K::hl };
+    cloud.neighbors.of(i).iter().any(|&j| {
+        let j = j as usize;
+        weight((x[j] - x[i]).norm(), cloud.pair(i, j).0) != 0.0
+    })
+}
+
 #[inline(always)]
 fn lattice_row(
     cloud: &Cloud,

@@ -16,24 +16,33 @@
 //! Which formula each variant is, with the paper and equation, is in the doc comment of
 //! the submodule that defines it.
 
+mod collision;
 mod density;
 mod divergence;
 mod gradient;
 mod laplacian;
 mod moments;
 mod second_derivatives;
+mod vector_laplacian;
 
-pub use density::{number_density_and_divergence, number_density_and_divergence_all};
+pub use collision::{collision_velocity_change, collision_velocity_changes};
+pub use density::{
+    hs_divergence_row, neighbour_count, number_density_and_divergence,
+    number_density_and_divergence_all, number_density_gradient,
+};
 pub use divergence::divergence;
 pub use gradient::{
-    corrected_gradient_matrix, gradient, gradient_row, minimum_over_neighbourhood,
-    pressure_gradient, GradientRow, PressureGradient, VirtualPoints,
+    corrected_gradient_matrix, corrected_gradient_row, first_moment, gradient, gradient_row,
+    minimum_over_neighbourhood, pressure_gradient, GradientRow, PressureGradient, VirtualPoints,
 };
-pub use laplacian::{for_each_lattice_coefficient, laplacian, laplacian_row, LaplacianRow};
+pub use laplacian::{
+    for_each_lattice_coefficient, has_laplacian_neighbour, laplacian, laplacian_row, LaplacianRow,
+};
 pub use moments::LatticeConstants;
 pub use second_derivatives::{
     anisotropic_second_derivatives, second_derivatives, SecondDerivatives,
 };
+pub use vector_laplacian::{vector_laplacian_sum, vector_laplacian_sums};
 
 use super::neighbors::NeighborList;
 use super::resolution::Scales;
@@ -50,9 +59,11 @@ pub struct Cloud<'a> {
     /// Dimension d: 2 for the engine, 1 for the one-dimensional paper tests (points on
     /// the x axis).
     pub dim: Real,
-    /// Multi-resolution spacings: the step's operators (number density, HS divergence,
-    /// the lattice Laplacian rows, the pressure gradient) take each pair's radius and
-    /// volume factor from them; the other operators are single-resolution.
+    /// Multi-resolution spacings: the operators the step calls (number density and its
+    /// gradient, HS divergence, the lattice Laplacian rows and the vector Laplacian, the
+    /// pressure gradient and the corrected gradient's rows, the first moment, the
+    /// collision pass, the neighbourhood queries) take each pair's radius and volume
+    /// factor from them; the other operators are single-resolution.
     pub scales: Scales<'a>,
 }
 
@@ -95,6 +106,20 @@ impl<'a> Cloud<'a> {
     pub(crate) fn pair(&self, i: usize, j: usize) -> (Real, Real) {
         let (s, v) = self.scales.pair(i, j);
         (self.re * s, v)
+    }
+
+    /// Whether `pred(j)` holds for a neighbour j of i with 0 < r_ij < r_e s_ij (a query of
+    /// the neighbourhood, not a sum: it stops at the first such neighbour).
+    #[inline]
+    pub fn any_within(&self, i: usize, pred: impl Fn(usize) -> bool) -> bool {
+        let xi = self.positions[i];
+        self.neighbors.of(i).iter().any(|&j| {
+            let j = j as usize;
+            pred(j) && {
+                let d = (self.positions[j] - xi).norm();
+                d < self.pair(i, j).0 && d != 0.0
+            }
+        })
     }
 
     /// (j, r_ij, r) for the neighbours of i strictly inside r_e, in list order.

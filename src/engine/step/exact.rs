@@ -23,11 +23,10 @@
 //! at 1 cm) each apply the gradient, the divergence and an AMG cycle.
 
 use crate::engine::kernel::Kernel;
-use crate::engine::operators::corrected_gradient_matrix;
-use crate::engine::params::DIM;
+use crate::engine::operators::{corrected_gradient_row, hs_divergence_row, Cloud, GradientRow};
 use crate::engine::pressure::{self, SolveParams};
 use crate::engine::simulation::{SimError, Simulation};
-use crate::math::{Mat2, Real, Vec2};
+use crate::math::{Real, Vec2};
 use rayon::prelude::*;
 
 /// GMRES stops at this residual relative to the pressure equation's right-hand side:
@@ -37,56 +36,32 @@ const EXACT_TOLERANCE: Real = 1e-3;
 /// Krylov vectors kept before a restart.
 const RESTART: usize = 20;
 
-/// The corrected gradient's linear part at every particle, ∇p_i = Σ_j g_ij (p_j - p_i)
-/// + b_i, its coefficients stored by particle for the neighbours within r_e.
+/// The corrected gradient's linear part at every particle (`operators::corrected_gradient_row`),
+/// ∇p_i = Σ_j g_ij (p_j - p_i) + b_i, its coefficients stored by particle for the
+/// neighbours within r_e.
 struct Gradient {
     offsets: Vec<usize>,
     /// (neighbour, g_ij) for the neighbours within r_e.
-    coefficients: Vec<(u32, Vec2)>,
+    coefficients: Vec<(usize, Vec2)>,
     /// The virtual points' Neumann part (pressure-independent), normalised.
     wall: Vec<Vec2>,
 }
 
 impl Gradient {
-    fn new<K: Kernel>(sim: &Simulation) -> Self {
+    fn new<K: Kernel>(sim: &Simulation, cloud: &Cloud) -> Self {
         let prm = &sim.config.params;
-        let (re, n0, c_grad) = (prm.re, prm.n0, prm.gradient_coefficient);
-        let x = &sim.workspace.scratch.x_star;
-        let nb = &sim.workspace.neighbors;
         let contacts = &sim.workspace.contacts;
         let neumann = &sim.workspace.scratch.neumann;
-        let rows: Vec<(Vec<(u32, Vec2)>, Vec2)> = (0..x.len())
+        let rows: Vec<(GradientRow, Vec2)> = (0..cloud.len())
             .into_par_iter()
             .map(|i| {
-                let mut moment = Mat2::zeros();
-                let mut raw = Vec::with_capacity(nb.of(i).len());
-                for &j in nb.of(i) {
-                    let r = x[j as usize] - x[i];
-                    let d2 = r.norm_squared();
-                    let d = d2.sqrt();
-                    if d < re && d > 0.0 {
-                        let w = K::w(d, re) / d2;
-                        moment += r * r.transpose() * w;
-                        raw.push((j, r * w));
-                    }
-                }
-                let base = contacts.offsets[i] as usize;
-                let mut linear = Vec2::zeros();
-                for (k, c) in contacts.of(i).iter().enumerate() {
-                    linear += c.terms.moment2_times(neumann[base + k]);
-                    let [xx, xy, yy] = c.terms.moment2;
-                    moment += Mat2::new(xx, xy, xy, yy);
-                }
-                // GC, or the classic normalisation where the moments are degenerate
-                let scale = corrected_gradient_matrix(&moment, n0, DIM)
-                    .map_or(Mat2::identity() * c_grad, |c| c / n0);
-                let row = raw.into_iter().map(|(j, g)| (j, scale * g)).collect();
-                (row, scale * linear)
+                let walls = contacts.virtual_points(i, neumann);
+                corrected_gradient_row::<K>(cloud, prm.n0, prm.gradient_coefficient, i, walls)
             })
             .collect();
-        let mut offsets = Vec::with_capacity(x.len() + 1);
-        let mut coefficients = Vec::with_capacity(nb.indices.len());
-        let mut wall = Vec::with_capacity(x.len());
+        let mut offsets = Vec::with_capacity(cloud.len() + 1);
+        let mut coefficients = Vec::with_capacity(cloud.neighbors.indices.len());
+        let mut wall = Vec::with_capacity(cloud.len());
         offsets.push(0);
         for (c, b) in rows {
             coefficients.extend(c);
@@ -111,7 +86,7 @@ impl Gradient {
                     self.wall[i]
                 };
                 for &(j, c) in &self.coefficients[self.offsets[i]..self.offsets[i + 1]] {
-                    g += c * (p[j as usize] - p[i]);
+                    g += c * (p[j] - p[i]);
                 }
                 g
             })
@@ -150,25 +125,20 @@ pub(super) fn correct_to_exact_projection<K: Kernel>(
         .iter()
         .map(|&i| s.source_extra[i as usize])
         .collect();
-    let gradient = Gradient::new::<K>(sim);
+    // the exact projection's gradient and divergence rows are single-resolution
+    let cloud = Cloud::new(x, nb, re);
+    let gradient = Gradient::new::<K>(sim, &cloud);
     // HS divergence coefficients of the exact rows: ∇·u_i = Σ_j e_ij·(u_j - u_i) + wall
-    let divergence: Vec<Vec<(u32, Vec2)>> = s
+    let divergence: Vec<Vec<(usize, Vec2)>> = s
         .particle_of
         .par_iter()
         .zip(exact.par_iter())
         .map(|(&i, &e)| {
-            let i = i as usize;
-            if !e {
-                return Vec::new();
+            if e {
+                hs_divergence_row::<K>(&cloud, c_div, i as usize)
+            } else {
+                Vec::new()
             }
-            nb.of(i)
-                .iter()
-                .filter_map(|&j| {
-                    let r = x[j as usize] - x[i];
-                    let d = r.norm();
-                    (d > 0.0 && d < re).then(|| (j, r * (-c_div * K::dw(d, re) / d)))
-                })
-                .collect()
         })
         .collect();
     let theta = blend;
@@ -208,7 +178,7 @@ pub(super) fn correct_to_exact_projection<K: Kernel>(
             let laplacian = *o;
             let mut div = 0.0;
             for &(j, e) in &divergence[row] {
-                div += e.dot(&(u[j as usize] - u[i]));
+                div += e.dot(&(u[j] - u[i]));
             }
             for ct in contacts.of(i) {
                 let wall = if homogeneous {

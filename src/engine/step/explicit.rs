@@ -2,15 +2,17 @@
 //! eqs. 9-10).
 
 use super::walls::KernelWeights;
-use crate::case::ViscosityKind;
 use crate::engine::kernel::Kernel;
-use crate::engine::params::DIM;
+use crate::engine::operators::{vector_laplacian_sums, Cloud};
 use crate::engine::resolution::Scales;
 use crate::engine::simulation::{Simulation, WallLoad};
 use crate::math::{vec2, Real, Vec2};
 use rayon::prelude::*;
 
-/// Gravity and (when nu > 0) viscosity with no-slip (or free-slip) walls.
+/// Gravity and (when nu > 0) viscosity: the fluid pairs' viscous Laplacian
+/// (`operators::vector_laplacian_sums`, the case's form and Laplacian weight) plus the
+/// walls' mirror terms (`WallContacts::viscous_mirror`, no slip or free slip), times
+/// nu and the lattice coefficient.
 pub(super) fn apply_explicit_forces<K: Kernel>(
     sim: &mut Simulation,
     weights: &KernelWeights<K>,
@@ -34,45 +36,24 @@ pub(super) fn apply_explicit_forces<K: Kernel>(
     let (x, u) = (&sim.particles.position, &sim.particles.velocity);
     let (nb, contacts) = (&sim.workspace.neighbors, &sim.workspace.contacts);
     let free_slip: Vec<bool> = sim.walls.iter().map(|w| w.free_slip).collect();
-    let form = sim.config.method.viscosity;
-    let scales = Scales::new(&sim.particles.scale, sim.config.multi_resolution);
-    // a particle created after the last neighbour search has no list yet
+    // a particle created after the last neighbour search has no list yet: the cloud is
+    // the particles that have one
+    let listed = nb.len().min(x.len());
+    let cloud = Cloud::new(&x[..listed], nb, sim.config.params.re_lap).with_scales(sim.scales());
+    let lap = vector_laplacian_sums::<K>(
+        weights.classic_laplacian(),
+        sim.config.method.viscosity,
+        &cloud,
+        u,
+    );
     let accel: Vec<(Vec2, Vec2)> = (0..x.len())
         .into_par_iter()
         .map(|i| {
-            if i >= nb.len() {
+            if i >= listed {
                 return (g, Vec2::zeros());
             }
-            let mut lap = Vec2::zeros();
-            for &j in nb.of(i) {
-                let j = j as usize;
-                let rij = x[j] - x[i];
-                let r = rij.norm();
-                let du = u[j] - u[i];
-                // the pair's radius and volume factor (`resolution`)
-                let (s, v) = scales.pair(i, j);
-                let l = weights.laplacian_scaled(r, s) * v;
-                lap += match form {
-                    ViscosityKind::Laplacian => du * l,
-                    ViscosityKind::StrainRate if r > 0.0 => {
-                        rij * ((DIM + 2.0) * du.dot(&rij) / (r * r) * l)
-                    }
-                    ViscosityKind::StrainRate => Vec2::zeros(),
-                };
-            }
-            let mut wall = Vec2::zeros();
-            for ct in contacts.of(i) {
-                // mirror velocity 2 u_w - u_i (no slip); free slip mirrors the
-                // normal component only, so the wall exerts no shear
-                let relative = ct.wall_velocity - u[i];
-                let mirrored = if free_slip[ct.object as usize] {
-                    ct.normal * relative.dot(&ct.normal)
-                } else {
-                    relative
-                };
-                wall += mirrored * (2.0 * ct.terms.laplacian_sum);
-            }
-            (g + (lap + wall) * (nu * c), wall * (nu * c))
+            let wall = contacts.viscous_mirror(i, u[i], &free_slip);
+            (g + (lap[i] + wall) * (nu * c), wall * (nu * c))
         })
         .collect();
     let m = sim.config.params.particle_mass;

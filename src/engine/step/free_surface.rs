@@ -1,7 +1,7 @@
 //! Free-surface detection and the Dirichlet value of surface particles.
 
 use crate::engine::kernel::Kernel;
-use crate::engine::resolution::Scales;
+use crate::engine::operators::{first_moment, neighbour_count, Cloud};
 use crate::engine::simulation::Simulation;
 use crate::math::{vec2, Real, Vec2};
 use rayon::prelude::*;
@@ -11,45 +11,33 @@ use rayon::prelude::*;
 /// test a particle near the edge of both is neither: it gets a surface share
 /// (`surface_share`) that the pressure equation turns into a penalty.
 pub(super) fn detect_free_surface<K: Kernel>(sim: &mut Simulation) {
-    let (x, nb, contacts) = (
-        &sim.workspace.scratch.x_star,
-        &sim.workspace.neighbors,
-        &sim.workspace.contacts,
-    );
+    let contacts = &sim.workspace.contacts;
     let (n0, re, l0) = (
         sim.config.params.n0,
         sim.config.params.re,
         sim.config.params.l0,
     );
+    let scales = sim.scales();
+    let cloud =
+        Cloud::new(&sim.workspace.scratch.x_star, &sim.workspace.neighbors, re).with_scales(scales);
     let beta = sim.config.method.free_surface.threshold;
     let asym_limit = sim.config.method.free_surface.asymmetry;
     let n_star = &sim.workspace.scratch.n_star;
     let offset = sim.config.method.free_surface.offset;
-    let scales = Scales::new(&sim.particles.scale, sim.config.multi_resolution);
     let rho_g = vec2(sim.config.params.gravity) * sim.config.params.density;
     // (is surface, Dirichlet value): the surface lies half a spacing beyond the particle,
     // so its hydrostatic pressure is rho g·m̂ l0/2 (m̂ the inward normal). Gravity only:
     // an estimate from the previous pressure gradient feeds back into itself (measured:
     // a still tank drifted 2.5% after 1.3 s).
     let soft = sim.config.method.free_surface.soft;
-    let flags: Vec<(bool, Real, Real)> = (0..x.len())
+    let flags: Vec<(bool, Real, Real)> = (0..cloud.len())
         .into_par_iter()
         .map(|i| {
             let n = n_star[i];
             if n >= beta * n0 {
                 return (false, 0.0, 0.0);
             }
-            let mut m = Vec2::zeros();
-            for &j in nb.of(i) {
-                let j = j as usize;
-                let r = x[j] - x[i];
-                let d2 = r.norm_squared();
-                let d = d2.sqrt();
-                let (s, v) = scales.pair(i, j);
-                if d < re * s {
-                    m += r * (K::w(d, re * s) / d2 * v);
-                }
-            }
+            let mut m = first_moment::<K>(&cloud, i);
             for c in contacts.of(i) {
                 m += c.terms.moment1;
             }
@@ -132,18 +120,14 @@ pub(super) fn release_isolated_clusters(sim: &mut Simulation) {
     let surface = &sim.particles.free_surface;
     let (re, re_lap) = (sim.config.params.re, sim.config.params.re_lap);
     let lattice_neighbours = sim.config.params.lattice.neighbours;
-    let scales = Scales::new(&sim.particles.scale, sim.config.multi_resolution);
+    let scales = sim.scales();
+    let cloud = Cloud::new(x, nb, re).with_scales(scales);
     let seeds: Vec<usize> = (0..x.len().min(nb.len()))
         .into_par_iter()
         .filter(|&i| {
             !surface[i]
                 && !contacts.of(i).is_empty()
-                && 2 * nb
-                    .of(i)
-                    .iter()
-                    .filter(|&&j| (x[j as usize] - x[i]).norm() < re * scales.pair(i, j as usize).0)
-                    .count()
-                    < lattice_neighbours
+                && 2 * neighbour_count(&cloud, i) < lattice_neighbours
         })
         .collect();
     let mut released: Vec<usize> = Vec::new();

@@ -2,10 +2,12 @@
 //! assembly and solve.
 
 use super::walls::KernelWeights;
-use crate::case::{LaplacianKind, WallKinematics};
+use crate::case::WallKinematics;
 use crate::engine::config::{Projection, Source};
 use crate::engine::kernel::Kernel;
-use crate::engine::operators::{for_each_lattice_coefficient, laplacian_row, Cloud, Normalisation};
+use crate::engine::operators::{
+    for_each_lattice_coefficient, has_laplacian_neighbour, laplacian_row, Cloud, Normalisation,
+};
 use crate::engine::pressure::{self, concat_into, Entries, SolveParams};
 use crate::engine::resolution::Scales;
 use crate::engine::simulation::{SimError, Simulation};
@@ -57,17 +59,14 @@ pub(super) fn assemble_pressure_equation<K: Kernel>(
     let x = &sim.workspace.scratch.x_star;
     let nb = &sim.workspace.neighbors;
     let scales = Scales::new(&sim.particles.scale, sim.config.multi_resolution);
+    let cloud = Cloud::new(x, nb, p.re_lap).with_scales(scales);
+    // Imoto's second-order Laplacian is the classic one (Imoto 2022 Theorem 3.1)
+    let classic = weights.classic_laplacian();
     // a particle with no Laplacian neighbour cannot be solved for: Dirichlet
     let surface = &sim.particles.free_surface;
     let isolated: Vec<usize> = (0..np)
         .into_par_iter()
-        .filter(|&i| {
-            !surface[i]
-                && nb.of(i).iter().all(|&j| {
-                    let s = scales.pair(i, j as usize).0;
-                    weights.laplacian_scaled((x[j as usize] - x[i]).norm(), s) == 0.0
-                })
-        })
+        .filter(|&i| !surface[i] && !has_laplacian_neighbour::<K>(classic, &cloud, i))
         .collect();
     for i in isolated {
         sim.particles.free_surface[i] = true;
@@ -136,10 +135,7 @@ pub(super) fn assemble_pressure_equation<K: Kernel>(
     // which carries the Neumann condition, with the same lattice normalisation.
     let kind = sim.config.method.laplacian;
     let operator_rows = !kind.is_symmetric();
-    let cloud = Cloud::new(x, nb, p.re_lap).with_scales(scales);
     let lattice = Normalisation::Reference(p.lattice_lap);
-    // Imoto's second-order Laplacian is the classic one (Imoto 2022 Theorem 3.1)
-    let classic = matches!(kind, LaplacianKind::Classic | LaplacianKind::SecondOrder);
     let neumann = &sim.workspace.scratch.neumann;
     let nu = particle_of.len();
     // the fill n*/n0 of each neighbourhood, floored (`Scheme::laplacian_fill_floor`);

@@ -1,8 +1,12 @@
 //! Spacing control after the correction: velocity filter, sponge layers, the collision
 //! and wall-repulsion safety net, particle shifting.
 
+use crate::case::ViscosityKind;
 use crate::engine::config::SpacingControl;
 use crate::engine::kernel::Kernel;
+use crate::engine::operators::{
+    collision_velocity_changes, number_density_gradient, vector_laplacian_sums, Cloud,
+};
 use crate::engine::simulation::{Simulation, WallLoad};
 use crate::engine::walls::{moment_about, PlacedWall};
 use crate::math::{Real, Vec2};
@@ -21,38 +25,14 @@ pub(super) fn keep_particles_apart(
     let m = sim.config.params.particle_mass;
     let n = sim.particles.len();
     if let SpacingControl::Collision { distance } = sim.config.method.spacing_control {
-        let rc = distance * l0;
-        let scales = sim.scales();
-        let (x, u, nb) = (
+        // the collision distance is the cloud's radius
+        let cloud = Cloud::new(
             &sim.particles.position,
-            &sim.particles.velocity,
             &sim.workspace.neighbors,
-        );
-        let du: Vec<Vec2> = (0..n)
-            .into_par_iter()
-            .map(|i| {
-                let mut d = Vec2::zeros();
-                for &j in nb.of(i) {
-                    let j = j as usize;
-                    let r = x[j] - x[i];
-                    let rc = rc * scales.pair(i, j).0;
-                    // most pairs are well apart: skip them without the square root (the
-                    // margin keeps the test below the one that decides)
-                    if r.norm_squared() > rc * rc * (1.0 + 1e-9) {
-                        continue;
-                    }
-                    let dist = r.norm();
-                    if dist < rc && dist > 0.0 {
-                        let rh = r / dist;
-                        let vn = (u[j] - u[i]).dot(&rh);
-                        if vn < 0.0 {
-                            d += rh * (0.5 * (1.0 + e) * vn);
-                        }
-                    }
-                }
-                d
-            })
-            .collect();
+            distance * l0,
+        )
+        .with_scales(sim.scales());
+        let du = collision_velocity_changes(&cloud, &sim.particles.velocity, e);
         let parts = &mut sim.particles;
         parts
             .velocity
@@ -100,38 +80,25 @@ pub(super) fn keep_particles_apart(
 }
 
 /// The velocity filter (`scheme.velocity_filter`): u_i += eps Σ_j w_ij (u_j - u_i) / n0
-/// over the fluid neighbours at x*. The pair weights are symmetric, so the fluid's
+/// over the fluid neighbours at x* (the pair sum of the classic vector Laplacian at r_e,
+/// `operators::vector_laplacian_sums`). The pair weights are symmetric, so the fluid's
 /// momentum is unchanged; a smooth field changes by O(eps l0² ∇²u) per step, while the
 /// odd-even mode (neighbours moving in opposite directions, invisible to the divergence
 /// of the PPE source and to the gradient) loses a share of order eps every step.
 pub(super) fn filter_velocity<K: Kernel>(sim: &mut Simulation, eps: Real) {
     let (re, n0) = (sim.config.params.re, sim.config.params.n0);
-    let scales = sim.scales();
-    let (x, u, nb) = (
-        &sim.workspace.scratch.x_star,
+    let x = &sim.workspace.scratch.x_star;
+    let nb = &sim.workspace.neighbors;
+    // a particle created after the last neighbour search has no list and no change
+    let cloud = Cloud::new(&x[..nb.len().min(x.len())], nb, re).with_scales(sim.scales());
+    let sums = vector_laplacian_sums::<K>(
+        true,
+        ViscosityKind::Laplacian,
+        &cloud,
         &sim.particles.velocity,
-        &sim.workspace.neighbors,
     );
-    let du: Vec<Vec2> = (0..u.len())
-        .into_par_iter()
-        .map(|i| {
-            if i >= nb.len() {
-                return Vec2::zeros();
-            }
-            let mut s = Vec2::zeros();
-            for &j in nb.of(i) {
-                let j = j as usize;
-                let d = (x[j] - x[i]).norm();
-                let (sij, v) = scales.pair(i, j);
-                if d < re * sij && d > 0.0 {
-                    s += (u[j] - u[i]) * (K::w(d, re * sij) * v);
-                }
-            }
-            s * (eps / n0)
-        })
-        .collect();
-    for (ui, d) in sim.particles.velocity.iter_mut().zip(du) {
-        *ui += d;
+    for (i, ui) in sim.particles.velocity.iter_mut().enumerate() {
+        *ui += sums.get(i).map_or(Vec2::zeros(), |s| s * (eps / n0));
     }
 }
 
@@ -148,31 +115,17 @@ pub(super) fn shift_particles<K: Kernel>(sim: &mut Simulation, a: Real) {
         sim.config.params.n0,
     );
     let scales = sim.scales();
-    let (x, nb, contacts, surface) = (
-        &sim.particles.position,
-        &sim.workspace.neighbors,
-        &sim.workspace.contacts,
-        &sim.particles.free_surface,
-    );
-    let shift: Vec<Vec2> = (0..x.len())
+    let (contacts, surface) = (&sim.workspace.contacts, &sim.particles.free_surface);
+    let cloud =
+        Cloud::new(&sim.particles.position, &sim.workspace.neighbors, re).with_scales(scales);
+    let shift: Vec<Vec2> = (0..cloud.len())
         .into_par_iter()
         .map(|i| {
-            let mut grad = Vec2::zeros();
-            let mut near_surface = surface[i];
-            for &j in nb.of(i) {
-                let j = j as usize;
-                let r = x[i] - x[j];
-                let d = r.norm();
-                let (s, v) = scales.pair(i, j);
-                if d >= re * s || d == 0.0 {
-                    continue;
-                }
-                grad += r * (K::dw(d, re * s) / d * v);
-                near_surface |= surface[j];
-            }
+            let mut grad = number_density_gradient::<K>(&cloud, i);
             for c in contacts.of(i) {
                 grad += c.terms.number_density_gradient;
             }
+            let near_surface = surface[i] || cloud.any_within(i, |j| surface[j]);
             let l0 = l0 * scales.of(i);
             let mut dr = grad * (-a * l0 * l0 / n0);
             if near_surface {

@@ -28,18 +28,21 @@ impl<K: Kernel> KernelWeights<K> {
             _k: PhantomData,
         }
     }
+
+    /// Whether the Laplacian weight is w (classic and second-order Laplacians) rather
+    /// than the HL weight w'' - w'/r.
     #[inline]
-    pub(super) fn laplacian(&self, r: Real) -> Real {
-        self.laplacian_scaled(r, 1.0)
+    pub(super) fn classic_laplacian(&self) -> bool {
+        self.classic_laplacian
     }
 
-    /// The Laplacian weight of a pair with radius multiple `s` (s_ij of `resolution`).
+    /// The wall lattice's Laplacian weight at distance r.
     #[inline]
-    pub(super) fn laplacian_scaled(&self, r: Real, s: Real) -> Real {
+    pub(super) fn laplacian(&self, r: Real) -> Real {
         if self.classic_laplacian {
-            K::w(r, self.re_lap * s)
+            K::w(r, self.re_lap)
         } else {
-            K::hl(r, self.re_lap * s)
+            K::hl(r, self.re_lap)
         }
     }
 }

@@ -376,6 +376,26 @@ impl WallContacts {
         });
     }
 
+    /// The walls' share of the viscous Laplacian of particle i with velocity `u_i`,
+    /// before the Laplacian coefficient: Σ (u_m - u_i) Σ L over its contacts, with the
+    /// mirror velocity u_m = 2 u_w - u_i (no slip), or with only the normal component
+    /// mirrored on a wall object whose `free_slip[object]` is set, so that the wall
+    /// exerts no shear.
+    #[inline]
+    pub fn viscous_mirror(&self, i: usize, u_i: Vec2, free_slip: &[bool]) -> Vec2 {
+        let mut wall = Vec2::zeros();
+        for ct in self.of(i) {
+            let relative = ct.wall_velocity - u_i;
+            let mirrored = if free_slip[ct.object as usize] {
+                ct.normal * relative.dot(&ct.normal)
+            } else {
+                relative
+            };
+            wall += mirrored * (2.0 * ct.terms.laplacian_sum);
+        }
+        wall
+    }
+
     /// Each wall's virtual points for the pressure gradient of particle i, with the
     /// extrapolation gradient `neumann` of each of its contacts (p_k = p_i + c·r_ik).
     #[inline]
