@@ -108,6 +108,23 @@ async fn row(store: &JobStore, id: Uuid) -> JobRow {
     store.get(id).await.expect("get").expect("the job exists")
 }
 
+/// A worker reporting success for `attempt` of job `id` after the fact: whether the
+/// store wrote it.
+async fn late_success(store: &JobStore, id: Uuid, attempt: i64) -> bool {
+    store
+        .finish(
+            id,
+            attempt,
+            JobStatus::Succeeded,
+            None,
+            Some("{}"),
+            250,
+            0.5,
+        )
+        .await
+        .unwrap()
+}
+
 fn names(rows: &[JobRow]) -> Vec<&str> {
     rows.iter().map(|r| r.name.as_str()).collect()
 }
@@ -290,18 +307,7 @@ async fn a_late_finish_does_not_overwrite_a_finished_job(store: &JobStore) {
     let failed = row(store, id).await;
 
     assert!(
-        !store
-            .finish(
-                id,
-                attempt,
-                JobStatus::Succeeded,
-                None,
-                Some("{}"),
-                250,
-                0.5
-            )
-            .await
-            .unwrap(),
+        !late_success(store, id, attempt).await,
         "a finished job was finished again"
     );
     let kept = row(store, id).await;
@@ -321,10 +327,7 @@ async fn a_late_finish_does_not_overwrite_a_job_cancelled_in_the_queue(store: &J
     assert_eq!(cancelled.attempts, 0);
 
     assert!(
-        !store
-            .finish(id, 0, JobStatus::Succeeded, None, Some("{}"), 250, 0.5)
-            .await
-            .unwrap(),
+        !late_success(store, id, 0).await,
         "a cancelled job was finished"
     );
     let kept = row(store, id).await;
@@ -411,18 +414,7 @@ async fn sqlite_recovery_is_not_overwritten_by_the_orphaned_run() {
     assert_eq!(recovered.reason.as_deref(), Some("interrupted"));
     assert_eq!(row(&store, queued).await.status, JobStatus::Queued);
 
-    assert!(!store
-        .finish(
-            id,
-            attempt,
-            JobStatus::Succeeded,
-            None,
-            Some("{}"),
-            250,
-            0.5
-        )
-        .await
-        .unwrap());
+    assert!(!late_success(&store, id, attempt).await);
     let kept = row(&store, id).await;
     assert_eq!(kept.status, JobStatus::Failed);
     assert_eq!(kept.reason.as_deref(), Some("interrupted"));

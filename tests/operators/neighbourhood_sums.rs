@@ -22,8 +22,6 @@ use mpsfsi::engine::operators::{
 };
 use mpsfsi::engine::resolution::Scales;
 use mpsfsi::math::{Mat2, Real, Vec2};
-use rand::{Rng, SeedableRng};
-use rand_chacha::ChaCha8Rng;
 
 type K = WendlandC2;
 const L0: Real = 0.1;
@@ -33,22 +31,11 @@ const N: usize = 16;
 /// N × N points of spacing l0 from the origin: the top row, y = (N - 1) l0, is a flat
 /// free surface.
 fn square_lattice() -> Vec<Vec2> {
-    (0..N * N)
-        .map(|k| Vec2::new((k % N) as Real, (k / N) as Real) * L0)
-        .collect()
+    super::square_lattice(N, L0)
 }
 
 fn jittered(amplitude: Real, seed: u64) -> Vec<Vec2> {
-    let mut rng = ChaCha8Rng::seed_from_u64(seed);
-    square_lattice()
-        .into_iter()
-        .map(|p| {
-            p + Vec2::new(
-                rng.random_range(-amplitude..=amplitude),
-                rng.random_range(-amplitude..=amplitude),
-            )
-        })
-        .collect()
+    super::jittered_lattice(N, L0, amplitude, seed)
 }
 
 /// Whether p has a full neighbourhood (at least r_e from every edge).

@@ -23,9 +23,7 @@ const L0: Real = 0.1;
 const RE: Real = 3.1 * L0;
 
 fn square_lattice(n: usize) -> Vec<Vec2> {
-    (0..n * n)
-        .map(|k| Vec2::new((k % n) as Real, (k / n) as Real) * L0)
-        .collect()
+    super::square_lattice(n, L0)
 }
 
 /// Rows of spacing l0 shifted by half a spacing every other row: every point's
@@ -41,16 +39,7 @@ fn triangular_lattice(n: usize) -> Vec<Vec2> {
 }
 
 fn jittered(n: usize, amplitude: Real, seed: u64) -> Vec<Vec2> {
-    let mut rng = ChaCha8Rng::seed_from_u64(seed);
-    square_lattice(n)
-        .into_iter()
-        .map(|p| {
-            p + Vec2::new(
-                rng.random_range(-amplitude..=amplitude),
-                rng.random_range(-amplitude..=amplitude),
-            )
-        })
-        .collect()
+    super::jittered_lattice(n, L0, amplitude, seed)
 }
 
 /// Points at least `margin` inside the bounding box of `pos` (a full neighbourhood).

@@ -95,11 +95,5 @@ pub fn hs_divergence_row<K: Kernel>(cloud: &Cloud, c: Real, i: usize) -> Vec<(us
 /// included): Σ_j 1, the number density of a unit weight.
 #[inline]
 pub fn neighbour_count(cloud: &Cloud, i: usize) -> usize {
-    let x = cloud.positions;
-    cloud
-        .neighbors
-        .of(i)
-        .iter()
-        .filter(|&&j| (x[j as usize] - x[i]).norm() < cloud.pair(i, j as usize).0)
-        .count()
+    cloud.within(i).count()
 }

@@ -45,14 +45,7 @@ pub fn corrected_gradient_matrix(moment: &Mat2, n0: Real, dim: Real) -> Option<M
 /// reference value, Koshizuka & Oka 1996).
 #[inline]
 pub fn minimum_over_neighbourhood(cloud: &Cloud, f: &[Real], i: usize) -> Real {
-    let x = cloud.positions;
-    cloud
-        .neighbors
-        .of(i)
-        .iter()
-        .filter(|&&j| (x[j as usize] - x[i]).norm() < cloud.pair(i, j as usize).0)
-        .map(|&j| f[j as usize])
-        .fold(f[i], Real::min)
+    cloud.within(i).map(|j| f[j]).fold(f[i], Real::min)
 }
 
 /// (j, g_ij) of particle i.

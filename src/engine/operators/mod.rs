@@ -108,6 +108,18 @@ impl<'a> Cloud<'a> {
         (self.re * s, v)
     }
 
+    /// The neighbours j of i with r_ij < r_e s_ij (a coincident one included), in list
+    /// order.
+    #[inline]
+    pub fn within(&self, i: usize) -> impl Iterator<Item = usize> + '_ {
+        let xi = self.positions[i];
+        self.neighbors
+            .of(i)
+            .iter()
+            .map(|&j| j as usize)
+            .filter(move |&j| (self.positions[j] - xi).norm() < self.pair(i, j).0)
+    }
+
     /// Whether `pred(j)` holds for a neighbour j of i with 0 < r_ij < r_e s_ij (a query of
     /// the neighbourhood, not a sum: it stops at the first such neighbour).
     #[inline]

@@ -258,6 +258,16 @@ mod tests {
         }
     }
 
+    /// A matrix of `old` rows of garbage, as a reused buffer holds.
+    fn stale(old: usize) -> CsrMatrix {
+        CsrMatrix {
+            n: old,
+            row_ptr: vec![7; old + 1],
+            col: vec![9; old],
+            val: vec![-1.0; old],
+        }
+    }
+
     /// Rows written in place give the same matrix as the same rows copied from chunks,
     /// whatever the buffers held before and however short of its bound each chunk fell.
     #[test]
@@ -274,12 +284,7 @@ mod tests {
             })
             .collect();
         for old in [0usize, 4, 100] {
-            let mut m = CsrMatrix {
-                n: old,
-                row_ptr: vec![7; old + 1],
-                col: vec![9; old],
-                val: vec![-1.0; old],
-            };
+            let mut m = stale(old);
             let extra = m.fill_in_place(&bounds, |c, out| {
                 let n: u32 = lens[c].iter().sum();
                 for k in 0..n as usize {
@@ -302,12 +307,7 @@ mod tests {
     fn fill_from_chunks_gives_the_chunks_rows_in_order() {
         let chunks = [chunk(&[2, 0, 1], 0), chunk(&[3], 3), chunk(&[], 6)];
         for old in [0usize, 4, 100] {
-            let mut m = CsrMatrix {
-                n: old,
-                row_ptr: vec![7; old + 1],
-                col: vec![9; old],
-                val: vec![-1.0; old],
-            };
+            let mut m = stale(old);
             m.fill_from_chunks(&chunks);
             assert_eq!(m.n, 4);
             assert_eq!(m.row_ptr, [0, 2, 2, 3, 6]);
