@@ -232,7 +232,7 @@ fn free_fall_error(mass: f64) -> (f64, f64) {
 
 /// The axis offsets of an impact ensemble, in spacings from the lattice's nearest mirror
 /// line (the scene keeps every body at least 1/8 off).
-const AXIS_OFFSETS: [f64; 4] = [1.0 / 8.0, 1.0 / 6.0, 5.0 / 24.0, 1.0 / 4.0];
+pub const AXIS_OFFSETS: [f64; 4] = [1.0 / 8.0, 1.0 / 6.0, 5.0 / 24.0, 1.0 / 4.0];
 
 /// The value of largest magnitude, with its sign (0 for none).
 fn largest_in_magnitude(values: impl Iterator<Item = f64>) -> f64 {

@@ -2,6 +2,7 @@
 //! added-mass stabilisation, body walls in the number density, buoyancy, flotation
 //! and the slamming load of a wedge against the similarity solution.
 
+mod acceleration_reaction;
 mod apex;
 mod common;
 mod coupling;
