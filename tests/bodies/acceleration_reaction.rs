@@ -12,9 +12,8 @@
 //! between the momentum model and the Logvinovich split, which the test asserts. It does not yet say which model a light drop should follow (see
 //! docs/validation.md).
 
-use super::common::{csv_rows, shipped};
-use mpsfsi::case::{Limits, ValidCase};
-use mpsfsi::run::{run_case, Quiet, RunStatus};
+use super::common::{run_case_rows, shipped};
+use mpsfsi::run::RunStatus;
 
 const RHO: f64 = 1000.0;
 const V0: f64 = 6.15;
@@ -39,24 +38,15 @@ fn run(motion: &str, offset: f64, tag: &str) -> Run {
             "output.snapshot_interval=\"none\"".into(),
         ],
     );
-    let valid = ValidCase::new(case, &Limits::default()).expect("the case is valid");
-    let dir = std::env::temp_dir().join(format!("mpsfsi-reaction-{}-{tag}", std::process::id()));
-    let summary = run_case(&valid, &dir, &mut Quiet).expect("the run directory is written");
+    let (loads, bodies, summary) = run_case_rows(case, &format!("reaction-{tag}"), "wedge");
     assert_eq!(
         summary.status,
         RunStatus::Succeeded,
         "{tag}: {:?}",
         summary.reason
     );
-    let loads = csv_rows(&dir.join("loads.csv"), "wedge")
-        .iter()
-        .map(|r| (r[0], r[2]))
-        .collect();
-    let bodies = csv_rows(&dir.join("bodies.csv"), "wedge")
-        .iter()
-        .map(|r| (r[0], r[2], r[5]))
-        .collect();
-    let _ = std::fs::remove_dir_all(&dir);
+    let loads = loads.iter().map(|r| (r[0], r[2])).collect();
+    let bodies = bodies.iter().map(|r| (r[0], r[2], r[5])).collect();
     (loads, bodies)
 }
 

@@ -4,10 +4,11 @@
 use mpsfsi::analysis::reference::{
     FreeFall, FreeFallModel, LogvinovichFreeFall, WEDGE_30_FORCE_COEFFICIENT,
 };
-use mpsfsi::case::{load_case_file, Case};
+use mpsfsi::case::{load_case_file, Case, Limits, ValidCase};
 use mpsfsi::coupling::{BodySample, Coupling, CouplingOptions};
 use mpsfsi::engine::{SimError, Simulation};
 use mpsfsi::math::{Real, Vec2};
+use mpsfsi::run::{run_case, Quiet, Summary};
 use std::path::PathBuf;
 use std::time::Instant;
 
@@ -127,6 +128,19 @@ pub fn fit_line(x: &[Real], y: &[Real]) -> (Real, Real) {
 
 /// The rows of a run directory's csv file (loads.csv, bodies.csv) for the object `name`:
 /// time, then the numeric columns after the name.
+/// Run `case` through the CLI's run loop into a scratch directory named by `tag`, and
+/// return `body`'s rows of loads.csv (time, fx, fy, mz) and bodies.csv (time, x, y,
+/// angle, vx, vy, omega) with the summary; the directory is removed.
+pub fn run_case_rows(case: Case, tag: &str, body: &str) -> (Vec<Vec<f64>>, Vec<Vec<f64>>, Summary) {
+    let valid = ValidCase::new(case, &Limits::default()).expect("the case is valid");
+    let dir = std::env::temp_dir().join(format!("mpsfsi-bodies-{tag}-{}", std::process::id()));
+    let summary = run_case(&valid, &dir, &mut Quiet).expect("the run directory is written");
+    let loads = csv_rows(&dir.join("loads.csv"), body);
+    let bodies = csv_rows(&dir.join("bodies.csv"), body);
+    let _ = std::fs::remove_dir_all(&dir);
+    (loads, bodies, summary)
+}
+
 pub fn csv_rows(path: &std::path::Path, name: &str) -> Vec<Vec<f64>> {
     let text = std::fs::read_to_string(path).unwrap_or_else(|e| panic!("{}: {e}", path.display()));
     text.lines()

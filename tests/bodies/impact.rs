@@ -11,10 +11,10 @@
 //! checks the load for single-step spikes (`assert_no_spikes`) and prints the per-step
 //! scatter.
 
-use crate::common::{case_path, csv_rows, logvinovich_errors, momentum_model_errors, RHO};
+use crate::common::{case_path, logvinovich_errors, momentum_model_errors, run_case_rows, RHO};
 use mpsfsi::analysis::measure::{self, force_coefficient_from_onset};
-use mpsfsi::case::{parse_case_str, Case, Limits, ValidCase};
-use mpsfsi::run::{run_case, Quiet, Summary};
+use mpsfsi::case::{parse_case_str, Case};
+use mpsfsi::run::Summary;
 
 const BREADTH: f64 = 0.5;
 const SPEED: f64 = 6.15;
@@ -63,16 +63,9 @@ fn run_user_case_with_bodies(text: &str, body: &str) -> (Vec<(f64, f64)>, Vec<Ve
 
 fn run_parsed_case(case: Case, body: &str) -> (Vec<(f64, f64)>, Vec<Vec<f64>>, Summary) {
     let name = case.name.clone();
-    let valid = ValidCase::new(case, &Limits::default()).expect("the case is valid");
-    let dir = std::env::temp_dir().join(format!("mpsfsi-impact-{name}-{}", std::process::id()));
-    let summary = run_case(&valid, &dir, &mut Quiet).expect("the run directory is written");
-    let loads = csv_rows(&dir.join("loads.csv"), body)
-        .into_iter()
-        .map(|r| (r[0], r[2]))
-        .collect();
-    let bodies = csv_rows(&dir.join("bodies.csv"), body);
-    let _ = std::fs::remove_dir_all(&dir);
+    let (loads, bodies, summary) = run_case_rows(case, &format!("impact-{name}"), body);
     assert!(summary.reason.is_none(), "{name}: {:?}", summary.reason);
+    let loads = loads.into_iter().map(|r| (r[0], r[2])).collect();
     (loads, bodies, summary)
 }
 

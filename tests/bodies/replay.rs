@@ -10,25 +10,19 @@
 //! light fall's replay reads 2.8 % high (its steps differ from the free fall's, and the
 //! coarse load's step-to-step noise with them); at 5 mm 0.4 % low.
 
-use super::common::{csv_rows, shipped};
-use mpsfsi::case::{Case, Limits, ValidCase};
-use mpsfsi::run::{run_case, Quiet, RunStatus};
+use super::common::{run_case_rows, shipped};
+use mpsfsi::case::Case;
+use mpsfsi::run::RunStatus;
 
-/// The wedge's loads.csv rows (time, fx, fy, mz) and bodies.csv rows (time, x, y,
-/// angle, vx, vy, omega) of a run of `case`.
+/// The wedge's loads.csv and bodies.csv rows of a successful run of `case`.
 fn run_wedge(case: Case, tag: &str) -> (Vec<Vec<f64>>, Vec<Vec<f64>>) {
-    let valid = ValidCase::new(case, &Limits::default()).expect("the case is valid");
-    let dir = std::env::temp_dir().join(format!("mpsfsi-replay-{}-{tag}", std::process::id()));
-    let summary = run_case(&valid, &dir, &mut Quiet).expect("the run directory is written");
+    let (loads, bodies, summary) = run_case_rows(case, &format!("replay-{tag}"), "wedge");
     assert_eq!(
         summary.status,
         RunStatus::Succeeded,
         "{tag}: {:?}",
         summary.reason
     );
-    let loads = csv_rows(&dir.join("loads.csv"), "wedge");
-    let bodies = csv_rows(&dir.join("bodies.csv"), "wedge");
-    let _ = std::fs::remove_dir_all(&dir);
     (loads, bodies)
 }
 
