@@ -6,6 +6,7 @@ use super::params::MpsParameters;
 use super::particles::Particles;
 use super::resolution::Scales;
 use super::scene::{build_scene, Scene};
+use super::walls::pressure_load::SurfacePressure;
 use super::walls::WallObject;
 use super::workspace::Workspace;
 use crate::case::Case;
@@ -149,6 +150,9 @@ pub struct Simulation {
     /// Loads of the last step, one per wall object.
     pub loads: Vec<WallLoad>,
     pub stats: RunStatistics,
+    /// The pressure along every wall object's surface at the last step, as the load
+    /// integral reads it (one list per wall object, in the order of `walls`).
+    pub surface_pressure: Vec<Vec<SurfacePressure>>,
     /// The Courant limit of the next step with the last step's accelerations
     /// (bookkeeping::acceleration_limited_dt); infinite before the first step.
     pub(crate) acceleration_dt: Real,
@@ -191,6 +195,7 @@ impl Simulation {
             steps: 0,
             loads: vec![WallLoad::default(); n_walls],
             stats: RunStatistics::default(),
+            surface_pressure: vec![Vec::new(); n_walls],
             acceleration_dt: Real::INFINITY,
             workspace: Workspace::default(),
         };

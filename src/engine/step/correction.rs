@@ -8,7 +8,7 @@ use crate::engine::operators::{
 };
 use crate::engine::params::DIM;
 use crate::engine::simulation::{Simulation, WallLoad};
-use crate::engine::walls::pressure_load::pressure_loads;
+use crate::engine::walls::pressure_load::{pressure_loads, surface_pressures};
 use crate::engine::walls::{moment_about, PlacedWall};
 use crate::math::{vec2, Real, Vec2};
 use rayon::prelude::*;
@@ -94,21 +94,22 @@ pub(super) fn correct_velocity_and_position<K: Kernel>(
     let n = x.len();
     let contacts = &sim.workspace.contacts;
     let neumann = &sim.workspace.scratch.neumann;
+    // the surface pressure is read with either estimator: gauges and snapshots show it
+    let w = |d: Real| K::w(d, re);
+    let surfaces = surface_pressures(
+        x,
+        p,
+        sim.scales(),
+        &nb.grid,
+        walls,
+        &w,
+        rho,
+        vec2(prm.gravity),
+        prm.l0,
+        re,
+    );
     if sim.config.method.wall_load == WallLoadKind::PressureIntegral {
-        let w = |d: Real| K::w(d, re);
-        let integral = pressure_loads(
-            x,
-            p,
-            sim.scales(),
-            &nb.grid,
-            walls,
-            &w,
-            rho,
-            vec2(prm.gravity),
-            prm.l0,
-            re,
-        );
-        for (load, (f, moment)) in loads.iter_mut().zip(integral) {
+        for (load, (f, moment)) in loads.iter_mut().zip(pressure_loads(walls, &surfaces)) {
             load.pressure_force += f;
             load.moment += moment;
         }
@@ -129,6 +130,7 @@ pub(super) fn correct_velocity_and_position<K: Kernel>(
             load.moment += moment_about(walls[c.object as usize].state.center_of_mass, c.point, f);
         }
     }
+    sim.surface_pressure = surfaces;
     let scale = dt / rho;
     let parts = &mut sim.particles;
     parts

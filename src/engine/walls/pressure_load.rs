@@ -37,18 +37,33 @@ const FLOOR_SHARE: Real = 0.1;
 /// Sample points per particle spacing along the surface.
 const SAMPLES_PER_SPACING: Real = 2.0;
 
-/// One surface point: where, its outward (fluid-side) normal and the length it stands for.
-#[derive(Debug, Clone, Copy)]
-struct SurfacePoint {
-    point: Vec2,
-    normal: Vec2,
-    length: Real,
+/// The pressure the load integral reads at one point of a wall object's surface: the
+/// point stands for `length` of its segment, centred `along` metres from the segment's
+/// first end. The points of a wall come in the order of its segments, and along each.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct SurfacePressure {
+    /// Index into the wall's surface segments.
+    pub segment: u32,
+    pub along: Real,
+    pub length: Real,
+    pub point: Vec2,
+    /// Outward (fluid-side) normal.
+    pub normal: Vec2,
+    /// Pa, clipped at zero.
+    pub pressure: Real,
 }
 
-/// Points every l0/2 along each segment of `wall`, with normals towards the fluid.
-fn surface_points(wall: &PlacedWall, l0: Real) -> Vec<SurfacePoint> {
+/// How many equal pieces a segment `len` long is cut into for the integral (one every
+/// l0/2): the snapshots' surface cells use the same cut.
+pub fn pieces(len: Real, l0: Real) -> usize {
+    (len * SAMPLES_PER_SPACING / l0).ceil().max(1.0) as usize
+}
+
+/// Points every l0/2 along each segment of `wall`, with normals towards the fluid (the
+/// pressure not yet read).
+fn surface_points(wall: &PlacedWall, l0: Real) -> Vec<SurfacePressure> {
     let mut points = Vec::new();
-    for [a, b] in &wall.surface {
+    for (segment, [a, b]) in wall.surface.iter().enumerate() {
         let edge = b - a;
         let len = edge.norm();
         if len == 0.0 {
@@ -60,13 +75,17 @@ fn surface_points(wall: &PlacedWall, l0: Real) -> Vec<SurfacePoint> {
         if inside(probe, &wall.loop_edges) {
             normal = -normal;
         }
-        let k = (len * SAMPLES_PER_SPACING / l0).ceil().max(1.0) as usize;
+        let k = pieces(len, l0);
         let ds = len / k as Real;
         for m in 0..k {
-            points.push(SurfacePoint {
-                point: a + edge * ((m as Real + 0.5) / k as Real),
-                normal,
+            let share = (m as Real + 0.5) / k as Real;
+            points.push(SurfacePressure {
+                segment: segment as u32,
+                along: len * share,
                 length: ds,
+                point: a + edge * share,
+                normal,
+                pressure: 0.0,
             });
         }
     }
@@ -95,10 +114,10 @@ fn full_side_weight(w: &dyn Fn(Real) -> Real, l0: Real, re: Real) -> Real {
         .fold(Real::INFINITY, Real::min)
 }
 
-/// Force and moment (about each object's centre of mass) of the fluid pressure on every
-/// wall object. `grid` sorts `x` into cells at least `re` wide.
+/// The pressure along every wall object's surface (one list per wall, points every
+/// l0/2). `grid` sorts `x` into cells at least `re` wide.
 #[allow(clippy::too_many_arguments)]
-pub fn pressure_loads(
+pub fn surface_pressures(
     x: &[Vec2],
     p: &[Real],
     scales: Scales,
@@ -109,36 +128,51 @@ pub fn pressure_loads(
     gravity: Vec2,
     l0: Real,
     re: Real,
-) -> Vec<(Vec2, Real)> {
+) -> Vec<Vec<SurfacePressure>> {
     let floor = FLOOR_SHARE * full_side_weight(w, l0, re);
     let reach = (re * scales.range().1 / grid.cell_size).ceil() as isize;
     walls
         .iter()
         .map(|wall| {
-            let points = surface_points(wall, l0);
+            let mut points = surface_points(wall, l0);
+            points.par_iter_mut().for_each(|s| {
+                let c = (gravity - wall.state.point_acceleration(s.point)) * rho;
+                let (mut sw, mut swp) = (0.0, 0.0);
+                grid.for_each_near(s.point, reach, |j| {
+                    let r = s.point - x[j];
+                    let d = r.norm();
+                    let sj = scales.of(j);
+                    if d >= re * sj || r.dot(&s.normal) > 0.0 {
+                        return; // out of reach, or behind the surface
+                    }
+                    let wj = w(d / sj);
+                    sw += wj;
+                    swp += wj * (p[j] + c.dot(&r));
+                });
+                s.pressure = (swp / sw.max(floor)).max(0.0);
+            });
+            points
+        })
+        .collect()
+}
+
+/// Force and moment (about each object's centre of mass) of the surface pressure on
+/// every wall object: F = -∫ p n ds.
+pub fn pressure_loads(
+    walls: &[PlacedWall],
+    surfaces: &[Vec<SurfacePressure>],
+) -> Vec<(Vec2, Real)> {
+    walls
+        .iter()
+        .zip(surfaces)
+        .map(|(wall, points)| {
             let com = wall.state.center_of_mass;
             points
-                .par_iter()
+                .iter() // summed in order: the same bits on any number of threads
                 .map(|s| {
-                    let c = (gravity - wall.state.point_acceleration(s.point)) * rho;
-                    let (mut sw, mut swp) = (0.0, 0.0);
-                    grid.for_each_near(s.point, reach, |j| {
-                        let r = s.point - x[j];
-                        let d = r.norm();
-                        let sj = scales.of(j);
-                        if d >= re * sj || r.dot(&s.normal) > 0.0 {
-                            return; // out of reach, or behind the surface
-                        }
-                        let wj = w(d / sj);
-                        sw += wj;
-                        swp += wj * (p[j] + c.dot(&r));
-                    });
-                    let pressure = (swp / sw.max(floor)).max(0.0);
-                    let f = -s.normal * (pressure * s.length);
+                    let f = -s.normal * (s.pressure * s.length);
                     (f, moment_about(com, s.point, f))
                 })
-                .collect::<Vec<_>>()
-                .into_iter() // summed in order: the same bits on any number of threads
                 .fold((Vec2::zeros(), 0.0), |a, b| (a.0 + b.0, a.1 + b.1))
         })
         .collect()
