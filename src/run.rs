@@ -6,7 +6,7 @@ use crate::case::{self, Case, Scheme, ValidCase};
 use crate::coupling::Coupling;
 use crate::engine::{Attempt, SimError, Simulation, StageTimes, StepInfo};
 use crate::math::{vec2, Real};
-use crate::output::{probes::ProbePoint, RunWriter};
+use crate::output::RunWriter;
 use serde::{Deserialize, Serialize};
 use std::path::Path;
 use std::time::Instant;
@@ -194,15 +194,7 @@ pub fn run_case(
     let started = Instant::now();
     let mut sim = Simulation::new(case);
     let mut coupling = Coupling::new(case, &sim);
-    let probes: Vec<ProbePoint> = case
-        .output
-        .probes
-        .iter()
-        .map(|p| ProbePoint {
-            name: p.name.clone(),
-            position: vec2(p.position),
-        })
-        .collect();
+    let probes = crate::output::probes::points(case, &sim);
     let mut writer = RunWriter::create(
         out_dir,
         case.output.load_interval.seconds(case.time.end),

@@ -33,7 +33,22 @@ pub struct Output {
 pub struct Probe {
     #[schemars(extend("pattern" = r#"^[^,"\r\n]*[^\s,"][^,"\r\n]*$"#))]
     pub name: String,
+    /// Where the probe reads (m): in the world, or with `body` in that body's frame (the
+    /// coordinates of its polygon), on its surface.
     pub position: Point,
+    /// A gauge on this body: it moves with the body and reads the pressure the fluid puts
+    /// on the surface there, the pressure the load integral uses. Its position must lie
+    /// within half a particle spacing of the body's surface.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub body: Option<String>,
+    /// Length of surface a gauge averages over (m), centred on its position and clipped
+    /// to its face, as a transducer's face does; absent: a point. The reading is already
+    /// the kernel average of the particles within r_e (2.5 spacings), wider than a
+    /// transducer of a few millimetres at the spacings slamming is run at, so a point adds
+    /// no smoothing of its own. Only with `body`.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    #[schemars(extend("exclusiveMinimum" = 0))]
+    pub diameter: Option<f64>,
 }
 
 /// How often the load, body and probe rows are written. Each load row is the mean over

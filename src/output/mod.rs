@@ -23,7 +23,7 @@ use std::path::Path;
 
 pub const LOADS_HEADER: &str = "time,body,fx,fy,mz";
 pub const BODIES_HEADER: &str = "time,body,x,y,angle,vx,vy,omega";
-pub const PROBES_HEADER: &str = "time,probe,pressure";
+pub const PROBES_HEADER: &str = "time,probe,pressure,pressure_max";
 pub const ENERGY_HEADER: &str = "time,kinetic_energy,potential_energy,particles";
 
 /// Kinematics of one body at a sample time (x, y: centre of mass).
@@ -47,8 +47,18 @@ pub struct RunWriter {
     impulse: Vec<[Real; 3]>,
     loads: BufWriter<File>,
     bodies: Option<BufWriter<File>>,
-    probes: Option<(BufWriter<File>, Vec<probes::ProbePoint>)>,
+    probes: Option<Probes>,
     energy: Option<BufWriter<File>>,
+}
+
+/// probes.csv and what its next rows need: a row holds each probe's pressure at its time
+/// and the largest of the per-step readings since the previous row (a gauge is read for
+/// its peak, which a row interval longer than the peak would miss).
+struct Probes {
+    file: BufWriter<File>,
+    points: Vec<probes::ProbePoint>,
+    now: Vec<Real>,
+    max: Vec<Real>,
 }
 
 fn csv_file(path: &Path, header: &str) -> std::io::Result<BufWriter<File>> {
@@ -84,7 +94,12 @@ impl RunWriter {
             probes: if probes.is_empty() {
                 None
             } else {
-                Some((csv_file(&dir.join("probes.csv"), PROBES_HEADER)?, probes))
+                Some(Probes {
+                    file: csv_file(&dir.join("probes.csv"), PROBES_HEADER)?,
+                    now: vec![0.0; probes.len()],
+                    max: vec![Real::NEG_INFINITY; probes.len()],
+                    points: probes,
+                })
             },
             energy: if energy {
                 Some(csv_file(&dir.join("energy.csv"), ENERGY_HEADER)?)
@@ -106,6 +121,12 @@ impl RunWriter {
             self.impulse[k][0] += l.force.x * dt;
             self.impulse[k][1] += l.force.y * dt;
             self.impulse[k][2] += l.moment * dt;
+        }
+        if let Some(pr) = &mut self.probes {
+            pr.now = probes::sample(sim, &pr.points);
+            for (m, v) in pr.max.iter_mut().zip(&pr.now) {
+                *m = m.max(*v);
+            }
         }
         let due = match self.interval {
             None => true,
@@ -142,11 +163,17 @@ impl RunWriter {
             }
             w.flush()?;
         }
-        if let Some((w, points)) = &mut self.probes {
-            for (name, p) in probes::sample(sim, points) {
-                writeln!(w, "{t:.9e},{name},{p:.9e}")?;
+        if let Some(pr) = &mut self.probes {
+            for ((point, p), max) in pr.points.iter().zip(&pr.now).zip(&mut pr.max) {
+                writeln!(
+                    pr.file,
+                    "{t:.9e},{},{p:.9e},{:.9e}",
+                    point.name,
+                    max.max(*p)
+                )?;
+                *max = Real::NEG_INFINITY;
             }
-            w.flush()?;
+            pr.file.flush()?;
         }
         if let Some(w) = &mut self.energy {
             // the state at the sample time, not an interval mean
@@ -172,8 +199,8 @@ impl RunWriter {
         if let Some(w) = &mut self.bodies {
             w.flush()?;
         }
-        if let Some((w, _)) = &mut self.probes {
-            w.flush()?;
+        if let Some(pr) = &mut self.probes {
+            pr.file.flush()?;
         }
         if let Some(w) = &mut self.energy {
             w.flush()?;

@@ -276,15 +276,72 @@ pub(super) fn check_overlaps(case: &Case) -> Check {
 
 pub(super) fn check_output(case: &Case) -> Check {
     for (i, probe) in case.output.probes.iter().enumerate() {
-        if !in_domain(case, probe.position) {
-            return reject(
-                format!("output.probes[{i}].position"),
-                format!(
-                    "probe '{}' at {:?} lies outside the domain (min {:?}, max {:?})",
-                    probe.name, probe.position, case.domain.min, case.domain.max
-                ),
-            );
+        match &probe.body {
+            None => {
+                if probe.diameter.is_some() {
+                    return reject(
+                        format!("output.probes[{i}].diameter"),
+                        "a diameter applies to a gauge on a body: name the body in output.probes[].body, or drop the diameter",
+                    );
+                }
+                if !in_domain(case, probe.position) {
+                    return reject(
+                        format!("output.probes[{i}].position"),
+                        format!(
+                            "probe '{}' at {:?} lies outside the domain (min {:?}, max {:?})",
+                            probe.name, probe.position, case.domain.min, case.domain.max
+                        ),
+                    );
+                }
+            }
+            Some(name) => check_gauge(case, i, probe, name)?,
         }
+    }
+    Ok(())
+}
+
+/// A gauge names a body and sits on its surface (in the body's frame), within half a
+/// spacing: farther out it would read the fluid beside the body, not the surface.
+fn check_gauge(case: &Case, i: usize, probe: &crate::case::Probe, name: &str) -> Check {
+    let Some(body) = case.bodies.iter().find(|b| &b.name == name) else {
+        let names: Vec<&str> = case.bodies.iter().map(|b| b.name.as_str()).collect();
+        return reject(
+            format!("output.probes[{i}].body"),
+            format!(
+                "gauge '{}' names body '{name}', which the case does not have (bodies: {})",
+                probe.name,
+                if names.is_empty() {
+                    "none".to_string()
+                } else {
+                    names.join(", ")
+                }
+            ),
+        );
+    };
+    if let Some(d) = probe.diameter {
+        positive(
+            &format!("output.probes[{i}].diameter"),
+            d,
+            "the length of surface the gauge averages over",
+        )?;
+    }
+    let polygon = points(&body.polygon);
+    let at = vec2(probe.position);
+    let distance = (0..polygon.len())
+        .map(|k| {
+            let (a, b) = (polygon[k], polygon[(k + 1) % polygon.len()]);
+            (crate::geometry::closest_on_segment(at, a, b) - at).norm()
+        })
+        .fold(Real::INFINITY, Real::min);
+    let limit = 0.5 * case.particle_spacing;
+    if !(distance <= limit) {
+        return reject(
+            format!("output.probes[{i}].position"),
+            format!(
+                "gauge '{}' at {:?} in the frame of body '{name}' is {distance:.3e} m from its surface; a gauge must lie within half a particle spacing ({limit:.3e} m) of the surface it reads (positions are in the coordinates of the body's polygon)",
+                probe.name, probe.position
+            ),
+        );
     }
     Ok(())
 }
