@@ -543,6 +543,59 @@ fn probe_outside_the_domain() {
     assert_error(&e, "output.probes[1].position", "outside the domain");
 }
 
+/// A gauge on a body: its body must exist, it must sit on the body's surface (in the
+/// body's frame, within half a spacing: 5 mm here), and a diameter needs a body.
+#[test]
+fn gauges_on_bodies() {
+    let gauge = |position: Value| json!({ "name": "g", "body": "wedge", "position": position });
+    // on the wedge's face (0,0)-(0.05,0.03), and 4 mm off it
+    let on_face = parse_case_value({
+        let mut v = base_value();
+        v["output"]["probes"][1] = gauge(json!([0.025, 0.015]));
+        v["output"]["probes"][1]["diameter"] = json!(0.004);
+        v
+    })
+    .unwrap();
+    validate(&on_face, &Limits::default()).expect("a gauge on the face is valid");
+    let off = 0.004 / (0.05f64.powi(2) + 0.03f64.powi(2)).sqrt();
+    let near = [0.025 + 0.03 * off, 0.015 - 0.05 * off];
+    let near_case = parse_case_value({
+        let mut v = base_value();
+        v["output"]["probes"][1] = gauge(json!(near));
+        v
+    })
+    .unwrap();
+    validate(&near_case, &Limits::default()).expect("4 mm from the face is within 5 mm");
+
+    let e = rejected_json(|v| v["output"]["probes"][1] = gauge(json!([0.025, 0.005])));
+    assert_error(
+        &e,
+        "output.probes[1].position",
+        "within half a particle spacing",
+    );
+    let e = rejected_json(|v| {
+        v["output"]["probes"][1] = gauge(json!([0.025, 0.015]));
+        v["output"]["probes"][1]["body"] = json!("hull");
+    });
+    assert_error(&e, "output.probes[1].body", "bodies: wedge, box");
+    let e = rejected_json(|v| v["output"]["probes"][1]["diameter"] = json!(0.004));
+    assert_error(&e, "output.probes[1].diameter", "gauge on a body");
+    let e = rejected_json(|v| {
+        v["output"]["probes"][1] = gauge(json!([0.025, 0.015]));
+        v["output"]["probes"][1]["diameter"] = json!(0.0);
+    });
+    assert_error(&e, "output.probes[1].diameter", "positive");
+    // a gauge's position is in the body's frame: the world domain does not bound it
+    let far_body = parse_case_value({
+        let mut v = base_value();
+        v["bodies"][0]["position"] = json!([0.1, 0.1]);
+        v["output"]["probes"][1] = gauge(json!([0.025, 0.015]));
+        v
+    })
+    .unwrap();
+    validate(&far_body, &Limits::default()).expect("the gauge moves with the body");
+}
+
 #[test]
 fn duplicate_names() {
     let e = rejected_json(|v| v["bodies"][1]["name"] = json!("wedge"));
@@ -681,7 +734,7 @@ fn design_example_case_is_valid() {
           "motion": { "type": "prescribed", "velocity": [0.0, -6.15], "angular_velocity": 0.0 }
       } ],
       "time": { "end": 0.02, "cfl": 0.2, "max_dt": 1.0e-4 },
-      "output": { "load_interval": 1.0e-5, "snapshot_interval": null, "probes": [ { "name": "p1", "position": [0.0, -0.3] } ] },
+      "output": { "load_interval": 1.0e-5, "snapshot_interval": null, "probes": [ { "name": "p1", "position": [0.0, -0.3] }, { "name": "keel_gauge", "body": "wedge", "position": [0.05, 0.0289], "diameter": 0.004 } ] },
       "scheme": { }
     });
     validate(&parse_case_value(v).unwrap(), &Limits::default())
