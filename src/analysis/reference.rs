@@ -62,6 +62,27 @@ pub const WEDGE_30_FORCE_COEFFICIENT: Real = 14.04;
 /// Korobkin 2004): 7 % above the similarity solution.
 pub const LOGVINOVICH_30_FORCE_COEFFICIENT: Real = 15.09;
 
+/// The largest pressure on a wedge entering at constant speed, Cp_max = p_max / (½ ρ V²),
+/// and its height above the undisturbed surface over V t, by deadrise in degrees: Zhao &
+/// Faltinsen (1993), J. Fluid Mech. 246, similarity solution (docs/references.md).
+pub const SIMILARITY_PEAK: [(Real, Real, Real); 6] = [
+    (10.0, 77.85, 0.5556),
+    (15.0, 33.27, 0.5361),
+    (20.0, 17.77, 0.5087),
+    (25.0, 10.69, 0.4709),
+    (30.0, 6.927, 0.4243),
+    (40.0, 3.266, 0.2866),
+];
+
+/// (Cp_max, z_max / (V t)) of the tabulated deadrise within 0.5° of `beta` (radians);
+/// None between the table's angles, where the peak is not interpolated.
+pub fn similarity_peak(beta: Real) -> Option<(Real, Real)> {
+    SIMILARITY_PEAK
+        .iter()
+        .find(|(deg, _, _)| (beta.to_degrees() - deg).abs() <= 0.5)
+        .map(|&(_, cp, z)| (cp, z))
+}
+
 /// Wagner (1932) C_F = pi³ / (4 tan² beta): an upper bound, 66% high at 30°.
 pub fn wagner_force_coefficient(beta: Real) -> Real {
     std::f64::consts::PI.powi(3) / (4.0 * beta.tan().powi(2))

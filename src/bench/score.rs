@@ -225,11 +225,63 @@ fn score_wedge(case: &Case, dir: &Path) -> io::Result<Score> {
             ),
         ),
     };
-    Ok(Score::single(
+    let (error2, peak_note) = peak_cp_error(case, dir, &body.name, beta, speed);
+    Ok(Score {
         error,
-        "C_F vs similarity solution 14.04",
-        note,
-    ))
+        error_measure: "C_F vs similarity solution 14.04".into(),
+        error2,
+        error2_measure: PEAK_CP.into(),
+        note: format!("{note}; {peak_note}"),
+    })
+}
+
+/// What the wedge's `error2` compares: the largest `pressure_max` of the body's gauges
+/// against the similarity solution's Cp_max of its deadrise.
+pub const PEAK_CP: &str = "peak_cp";
+
+/// The relative error of the largest gauge reading on `body` (probes.csv's
+/// `pressure_max` over ½ ρ V²) against the similarity solution's Cp_max, and a note; NaN
+/// without a gauge on the body or a tabulated deadrise.
+fn peak_cp_error(case: &Case, dir: &Path, body: &str, beta: Real, speed: Real) -> (Real, String) {
+    let gauges: Vec<&str> = case
+        .output
+        .probes
+        .iter()
+        .filter(|p| p.body.as_deref() == Some(body))
+        .map(|p| p.name.as_str())
+        .collect();
+    let Some((cp_max, _)) = reference::similarity_peak(beta) else {
+        return (
+            Real::NAN,
+            format!("no similarity peak tabulated at {:.1}°", beta.to_degrees()),
+        );
+    };
+    if gauges.is_empty() {
+        return (Real::NAN, "no gauge on the body".into());
+    }
+    let Ok(text) = std::fs::read_to_string(dir.join("probes.csv")) else {
+        return (Real::NAN, "no probes.csv".into());
+    };
+    let q = 0.5 * case.fluid.density * speed * speed;
+    let peak = text
+        .lines()
+        .skip(1)
+        .filter_map(|line| {
+            let f: Vec<&str> = line.split(',').collect();
+            (f.len() >= 4 && gauges.contains(&f[1])).then(|| f[3].parse::<Real>().ok())?
+        })
+        .fold(Real::NEG_INFINITY, Real::max);
+    if !peak.is_finite() {
+        return (Real::NAN, "no gauge rows".into());
+    }
+    (
+        measure::relative_error(peak / q, cp_max),
+        format!(
+            "peak Cp {:.2} of {} gauges vs {cp_max}",
+            peak / q,
+            gauges.len()
+        ),
+    )
 }
 
 /// A wedge's entry: speed, direction of motion, deadrise, the time its keel meets the

@@ -370,6 +370,60 @@ fn the_wedge_score_reads_the_similarity_force_from_its_onset_and_measures_a_wron
     assert!((ratio - 23.26 / 14.04).abs() < 1e-9, "{ratio}");
 }
 
+/// The wedge's second error is the peak Cp of its gauges (`peak_cp`): the largest
+/// `pressure_max` of the gauges on the body over ½ ρ V² against the similarity solution's
+/// 6.927 at 30°; a world probe does not count, and without a gauge there is none.
+#[test]
+fn the_wedge_score_reads_the_peak_of_its_gauges() {
+    use mpsfsi::bench::score::{score, Measure, RunOutcome, PEAK_CP};
+    let mut case = wedge_case();
+    let q = 0.5 * 1000.0 * 6.15f64.powi(2);
+    let outcome = RunOutcome {
+        succeeded: true,
+        simulated_time: 0.02,
+        particles: 1000,
+    };
+    let dir = crate::scratch_dir("wedge-peak-cp");
+    std::fs::write(
+        dir.join("loads.csv"),
+        "time,body,fx,fy,mz
+",
+    )
+    .unwrap();
+    let none = score(&Measure::Wedge, &case, &dir, &outcome).unwrap();
+    assert_eq!(none.error2_measure, PEAK_CP);
+    assert!(none.error2.is_nan(), "no gauge: {}", none.error2);
+    let probes: Vec<mpsfsi::case::Probe> = serde_json::from_value(serde_json::json!([
+        { "name": "far", "position": [0.5, -0.5] },
+        { "name": "g1", "body": "wedge", "position": [0.05, 0.02886] },
+        { "name": "g2", "body": "wedge", "position": [0.1, 0.05772] }
+    ]))
+    .unwrap();
+    case.output.probes = probes;
+    let mut text = String::from("time,probe,pressure,pressure_max\n");
+    for (k, (far, g1, g2)) in [(1.0, 2.0, 3.0), (90.0, 7.5, 6.0), (1.0, 4.0, 7.2)]
+        .iter()
+        .enumerate()
+    {
+        let t = (k + 1) as f64 * 1e-4;
+        for (name, cp) in [("far", far), ("g1", g1), ("g2", g2)] {
+            text.push_str(&format!(
+                "{t:.9e},{name},{:.9e},{:.9e}\n",
+                0.5 * cp * q,
+                cp * q
+            ));
+        }
+    }
+    std::fs::write(dir.join("probes.csv"), text).unwrap();
+    let s = score(&Measure::Wedge, &case, &dir, &outcome).unwrap();
+    assert!(
+        (s.error2 - (7.5 / 6.927 - 1.0)).abs() < 1e-9,
+        "{}",
+        s.error2
+    );
+    assert!(s.note.contains("peak Cp 7.50 of 2 gauges"), "{}", s.note);
+}
+
 /// The free fall is scored on its velocity loss over 0.6-0.9 t_chine against the
 /// momentum model: a body that follows the model reads 0, one that loses 5 % less speed
 /// reads 5 % (mean and worst sample; -5 % in the note), and one whose rows stop before
@@ -462,7 +516,7 @@ fn the_hydrostatic_score_compares_the_tank_load_with_the_water_weight() {
     let dir = crate::scratch_dir("hydrostatic-score");
     let (mut loads, mut probes) = (
         String::from("time,body,fx,fy,mz\n"),
-        String::from("time,probe,pressure\n"),
+        String::from("time,probe,pressure,pressure_max\n"),
     );
     for k in 1..=100 {
         let t = k as f64 * 0.01;
@@ -470,8 +524,8 @@ fn the_hydrostatic_score_compares_the_tank_load_with_the_water_weight() {
         let fy = if t <= 0.5 { 0.0 } else { 1.02 * weight };
         loads.push_str(&format!("{t:.9e},tank,0,{fy:.12e},0\n"));
         probes.push_str(&format!(
-            "{t:.9e},mid_depth,{:.12e}\n",
-            if t < 0.5 {
+            "{t:.9e},mid_depth,{p:.12e},{p:.12e}\n",
+            p = if t < 0.5 {
                 0.0
             } else {
                 0.99 * 1000.0 * 9.81 * 0.25
