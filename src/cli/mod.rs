@@ -1,5 +1,5 @@
 //! Command line (README.md; docs/contracts.md): `run`, `check`, `schema`, `serve`, `bench`, and
-//! `plot` (a flow picture from a run directory's snapshots).
+//! `plot` (a flow picture, or the pressure along a body, from a run directory's snapshots).
 //!
 //! Exit codes: 0 success; 1 a run that failed or was cancelled (the run directory
 //! keeps what was written); 2 a rejected case or bad arguments; 3 an I/O or service error.
@@ -52,7 +52,8 @@ pub enum Command {
         max_particles: Option<usize>,
     },
     /// Draw a run's flow: the particles of the snapshot nearest `--time` coloured by a
-    /// field, with the walls and bodies at their pose, as an SVG picture.
+    /// field, with the walls and bodies at their pose, as an SVG picture; or, with
+    /// `--surface BODY`, the pressure along that body's surface.
     Plot {
         /// Run directory (with `snapshots/`).
         run_dir: PathBuf,
@@ -66,6 +67,10 @@ pub enum Command {
         /// moving bodies, or everything without one).
         #[arg(long, allow_hyphen_values = true)]
         window: Option<String>,
+        /// Draw the pressure along this body's (or wall's) surface instead: Cp = p / (½ρV²)
+        /// (p in kPa when it does not move) against the arc length from its first vertex.
+        #[arg(long, value_name = "BODY", conflicts_with_all = ["field", "window"])]
+        surface: Option<String>,
         /// SVG file to write.
         #[arg(long)]
         out: PathBuf,
@@ -150,8 +155,12 @@ pub fn main(cli: Cli) -> i32 {
             time,
             field,
             window,
+            surface,
             out,
-        } => plot::plot(&run_dir, time, &field, window.as_deref(), &out),
+        } => match surface {
+            Some(body) => plot::plot_surface(&run_dir, time, &body, &out),
+            None => plot::plot(&run_dir, time, &field, window.as_deref(), &out),
+        },
         Command::Schema => {
             print!("{}", mpsfsi::case::schema::case_schema_json());
             0

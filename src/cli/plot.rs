@@ -1,7 +1,9 @@
 //! `mpsfsi plot RUN_DIR [--time T] [--field F] [--window X0,X1,Y0,Y1] --out FILE.svg`
+//! and `mpsfsi plot RUN_DIR --surface BODY [--time T] --out FILE.svg`
 
 use super::{EXIT_ERROR, EXIT_REJECTED};
 use mpsfsi::output::flow::{flow_svg, parse_window, read_snapshot, title, FlowField};
+use mpsfsi::output::surface::{surface_svg, surface_title, Objects};
 use std::path::Path;
 
 pub fn plot(
@@ -51,6 +53,65 @@ pub fn plot(
         "t = {:.6} s ({} particles) -> {}",
         snapshot.time,
         snapshot.particles.points.len(),
+        out.display()
+    );
+    0
+}
+
+/// The pressure along `body`'s surface at the snapshot nearest `time`.
+pub fn plot_surface(run_dir: &Path, time: Option<f64>, body: &str, out: &Path) -> i32 {
+    let objects = match Objects::of_run(run_dir) {
+        Ok(objects) => objects,
+        Err(e) => {
+            eprintln!("error: {}: {e}", run_dir.display());
+            return EXIT_ERROR;
+        }
+    };
+    // an unknown name is told first, unless the run names nothing yet
+    let found = objects.find(body);
+    if let (Err(e), false) = (&found, objects.0.is_empty()) {
+        eprintln!("error: --surface: {e}");
+        return EXIT_REJECTED;
+    }
+    let snapshot = match read_snapshot(run_dir, time) {
+        Ok(s) => s,
+        Err(e) => {
+            eprintln!("error: {}: {e}", run_dir.display());
+            return EXIT_ERROR;
+        }
+    };
+    let object = match found {
+        Ok(k) => k,
+        Err(e) => {
+            eprintln!("error: --surface: {e}");
+            return EXIT_REJECTED;
+        }
+    };
+    // the case's name from the summary of a run that has ended, else the directory's
+    let name = std::fs::read_to_string(run_dir.join("summary.json"))
+        .ok()
+        .and_then(|text| serde_json::from_str::<serde_json::Value>(&text).ok())
+        .and_then(|summary| summary["case"].as_str().map(str::to_string))
+        .or_else(|| {
+            run_dir
+                .file_name()
+                .map(|n| n.to_string_lossy().into_owned())
+        })
+        .unwrap_or_default();
+    let svg = match surface_svg(&snapshot, object, &surface_title(&name, body, &snapshot)) {
+        Ok(svg) => svg,
+        Err(e) => {
+            eprintln!("error: {e}");
+            return EXIT_ERROR;
+        }
+    };
+    if let Err(e) = std::fs::write(out, svg) {
+        eprintln!("error: cannot write {}: {e}", out.display());
+        return EXIT_ERROR;
+    }
+    println!(
+        "t = {:.6} s (the surface of {body}) -> {}",
+        snapshot.time,
         out.display()
     );
     0

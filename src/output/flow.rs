@@ -5,7 +5,8 @@
 //! What a test can read back: each particle is one filled `<rect>` of the particle
 //! spacing; the colour bar is [`BAR_STEPS`] `<rect>`s right of the plot; walls are
 //! `<polyline>`s in [`WALL_COLOUR`] and bodies in [`BODY_COLOUR`], of stroke width 2 and
-//! 3; [`Frame`] maps metres to the picture's pixels.
+//! 3, one per surface segment (the walls file's cells are pieces of them); [`Frame`] maps
+//! metres to the picture's pixels.
 
 use super::plot::{drawing, PlotError};
 use super::snapshots::{PVD_NAME, SNAPSHOT_DIR};
@@ -285,6 +286,25 @@ fn default_window(s: &Snapshot) -> [Real; 4] {
     [x0 - pad, x1 + pad, y0 - pad, y1 + pad]
 }
 
+/// The first and last cell of each surface segment of a walls file: the runs of
+/// consecutive line cells with the same `object` and `segment` (the pieces the pressure
+/// is written on), each drawn as one line. Without those arrays every cell is a run.
+fn segment_runs(w: &VtuData) -> Vec<(usize, usize)> {
+    let key = |k: usize| {
+        w.cell_scalar("object")
+            .zip(w.cell_scalar("segment"))
+            .map(|(o, s)| (o[k], s[k]))
+    };
+    let mut runs: Vec<(usize, usize)> = Vec::new();
+    for k in 0..w.cells {
+        match runs.last_mut() {
+            Some(run) if key(k).is_some() && key(k) == key(run.1) => run.1 = k,
+            _ => runs.push((k, k)),
+        }
+    }
+    runs
+}
+
 /// An axis label to 0.1 mm, without trailing zeros (plotters' own prints the zero tick
 /// of a symmetric window as "-0.0").
 fn tick(v: &Real) -> String {
@@ -407,22 +427,22 @@ pub fn flow_svg(
             .map_err(drawing)?;
         if let Some(w) = &snapshot.walls {
             let moving = w.cell_scalar("moving");
-            for k in 0..w.cells {
-                let body = moving.is_some_and(|m| m[k] > 0.5);
+            for (first, last) in segment_runs(w) {
+                let body = moving.is_some_and(|m| m[first] > 0.5);
                 let style = if body {
                     BODY_COLOUR.stroke_width(3)
                 } else {
                     WALL_COLOUR.stroke_width(2)
                 };
-                let cell = w.cell(k);
-                for pair in cell.windows(2) {
-                    let [a, b] = [pair[0], pair[1]].map(|i| (w.points[i][0], w.points[i][1]));
-                    // plotters would pin a point outside the window to its edge
-                    if let Some((a, b)) = clip_segment(a, b, [x0, x1, y0, y1]) {
-                        chart
-                            .draw_series(std::iter::once(PathElement::new(vec![a, b], style)))
-                            .map_err(drawing)?;
-                    }
+                let (Some(&a), Some(&b)) = (w.cell(first).first(), w.cell(last).last()) else {
+                    continue;
+                };
+                let [a, b] = [a, b].map(|i| (w.points[i][0], w.points[i][1]));
+                // plotters would pin a point outside the window to its edge
+                if let Some((a, b)) = clip_segment(a, b, [x0, x1, y0, y1]) {
+                    chart
+                        .draw_series(std::iter::once(PathElement::new(vec![a, b], style)))
+                        .map_err(drawing)?;
                 }
             }
         }

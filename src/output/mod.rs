@@ -13,6 +13,7 @@ pub mod plot;
 pub mod probes;
 pub mod series;
 pub mod snapshots;
+pub mod surface;
 pub mod vtk;
 
 use crate::engine::Simulation;

@@ -1,5 +1,6 @@
 //! VTK snapshots: `snapshots/step_NNNNNN.vtu` (the particles; NNNNNN the step number)
-//! and `snapshots/walls_NNNNNN.vtu` (every wall and body surface at its pose) every
+//! and `snapshots/walls_NNNNNN.vtu` (every wall and body surface at its pose, cut into the
+//! pieces the load integral reads, each with its pressure) every
 //! snapshot interval of simulated time, the first at t = 0, and `snapshots/run.pvd`, the
 //! ParaView collection indexing both by time, so that opening it shows the bodies moving
 //! with the water.
@@ -12,6 +13,8 @@ use super::vtk::{
     pvd_string, vtu_string, walls_vtu_string, Outline, PvdEntry, VtuFields, PARTICLES_PART,
     WALLS_PART,
 };
+use crate::engine::walls::pressure_load::{pieces, SurfacePressure};
+use crate::engine::walls::WallObject;
 use crate::engine::Simulation;
 use crate::math::Real;
 use std::path::{Path, PathBuf};
@@ -44,6 +47,46 @@ fn write_atomically(path: &Path, contents: &str) -> std::io::Result<()> {
     let tmp = path.with_extension("tmp");
     std::fs::write(&tmp, contents)?;
     std::fs::rename(&tmp, path)
+}
+
+/// The surface of wall object `w` at its pose as line cells carrying the pressure the
+/// load integral read: each segment cut into as many equal pieces as it has points in
+/// `points` (the object's [`SurfacePressure`] list, in segment order), cell k carrying
+/// point k's pressure. A segment without points (before the first step) is cut into
+/// [`pieces`] with pressure 0, a segment of zero length is one cell with pressure 0.
+fn outline(w: &WallObject, points: &[SurfacePressure], l0: Real) -> Outline {
+    let surface = w.shape.transformed(w.state.position, w.state.angle).surface;
+    let mut out = Outline {
+        cells: Vec::new(),
+        velocities: Vec::new(),
+        segment: Vec::new(),
+        pressure: Vec::new(),
+        moving: w.body.is_some(),
+        speed: w.state.velocity.norm(),
+    };
+    let mut next = 0;
+    for (index, [a, b]) in surface.iter().enumerate() {
+        let start = next;
+        while next < points.len() && points[next].segment as usize == index {
+            next += 1;
+        }
+        let own = &points[start..next];
+        let len = (b - a).norm();
+        let count = match (len > 0.0, own.len()) {
+            (false, _) => 1,
+            (true, 0) => pieces(len, l0),
+            (true, n) => n,
+        };
+        for m in 0..count {
+            let t = |m: usize| m as Real / count as Real;
+            let ends = [a + (b - a) * t(m), a + (b - a) * t(m + 1)];
+            out.cells.push(ends);
+            out.velocities.push(ends.map(|x| w.state.point_velocity(x)));
+            out.segment.push(index as u32);
+            out.pressure.push(own.get(m).map_or(0.0, |s| s.pressure));
+        }
+    }
+    out
 }
 
 impl SnapshotWriter {
@@ -91,21 +134,14 @@ impl SnapshotWriter {
         };
         let file = snapshot_file_name(sim.steps);
         write_atomically(&self.dir.join(&file), &vtu_string(&fields, sim.time))?;
+        let l0 = sim.config.params.l0;
         let outlines: Vec<Outline> = sim
             .walls
             .iter()
-            .map(|w| {
-                let segments = w.shape.transformed(w.state.position, w.state.angle).surface;
-                let velocities = segments
-                    .iter()
-                    .map(|ends| ends.map(|x| w.state.point_velocity(x)))
-                    .collect();
-                Outline {
-                    segments,
-                    velocities,
-                    moving: w.body.is_some(),
-                    speed: w.state.velocity.norm(),
-                }
+            .enumerate()
+            .map(|(k, w)| {
+                let points = sim.surface_pressure.get(k).map_or(&[][..], Vec::as_slice);
+                outline(w, points, l0)
             })
             .collect();
         let walls = walls_file_name(sim.steps);

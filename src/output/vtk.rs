@@ -1,11 +1,12 @@
 //! VTK XML files with inline binary (base64) arrays: per snapshot one UnstructuredGrid (`.vtu`) with the particles
-//! as vertex cells and one with the walls and bodies as line cells at their pose, and a
-//! ParaView collection (`.pvd`) indexing both by time (parts 0 and 1).
+//! as vertex cells and one with the walls and bodies as line cells at their pose, each
+//! cell carrying the surface pressure on it, and a ParaView collection (`.pvd`) indexing
+//! both by time (parts 0 and 1).
 //!
 //! The writer takes plain slices, so tests and tools can write grids without a
 //! simulation; the reader understands what the writer writes (and any `.vtu` whose
 //! `DataArray`s are inline, ASCII or binary with a UInt64 header, uncompressed), which
-//! is what the flow pictures and the benchmark's dam-break surge front read.
+//! is what the flow and surface pictures and the benchmark's dam-break surge front read.
 
 use crate::math::{Real, Vec2};
 use std::collections::BTreeMap;
@@ -30,12 +31,18 @@ pub struct VtuFields<'a> {
     pub particle_spacing: Option<Vec<Real>>,
 }
 
-/// The surface of one wall or body at its pose, for the walls grid.
+/// The surface of one wall or body at its pose, for the walls grid: its surface
+/// segments cut into line cells, in the order of the segments and along each.
 pub struct Outline {
-    /// Segments facing the fluid, world frame.
-    pub segments: Vec<[Vec2; 2]>,
-    /// Velocity of each segment's end points (rigid motion), one pair per segment.
+    /// Line cells facing the fluid, world frame.
+    pub cells: Vec<[Vec2; 2]>,
+    /// Velocity of each cell's end points (rigid motion), one pair per cell.
     pub velocities: Vec<[Vec2; 2]>,
+    /// Index of each cell's surface segment in the object (segments in the order of the
+    /// body polygon's or wall polyline's vertices).
+    pub segment: Vec<u32>,
+    /// Pressure on each cell (Pa).
+    pub pressure: Vec<Real>,
     /// A body (moving or free) rather than a fixed wall.
     pub moving: bool,
     /// Speed of the object's centre of mass (m/s).
@@ -196,21 +203,31 @@ pub fn vtu_string(fields: &VtuFields<'_>, time: Real) -> String {
     out
 }
 
-/// The text of a `.vtu` file with every wall and body surface segment as a line cell at
-/// its pose. Cell data: `object` (the outline's index, the order of loads.csv's names),
-/// `moving` (1 for a body) and `speed` (its centre of mass's, m/s); point data:
+/// The text of a `.vtu` file with every wall and body surface as line cells at its pose.
+/// Cell data: `object` (the outline's index, the order of loads.csv's names), `segment`
+/// (the surface segment the cell lies on, within its object), `moving` (1 for a body),
+/// `speed` (its centre of mass's, m/s) and `pressure` (Pa, on the cell); point data:
 /// `velocity` of the material point.
 pub fn walls_vtu_string(outlines: &[Outline], time: Real) -> String {
     let mut points = Vec::new();
     let mut velocity: Vec<Vec2> = Vec::new();
-    let (mut object, mut moving, mut speed) = (Vec::new(), Vec::new(), Vec::new());
+    let (mut object, mut segment, mut moving, mut speed, mut pressure) =
+        (Vec::new(), Vec::new(), Vec::new(), Vec::new(), Vec::new());
     for (k, o) in outlines.iter().enumerate() {
-        for (segment, ends) in o.segments.iter().zip(&o.velocities) {
-            points.extend(segment);
-            velocity.extend(ends);
+        assert!(
+            o.velocities.len() == o.cells.len()
+                && o.segment.len() == o.cells.len()
+                && o.pressure.len() == o.cells.len(),
+            "every cell of an outline has its velocities, segment and pressure"
+        );
+        for c in 0..o.cells.len() {
+            points.extend(o.cells[c]);
+            velocity.extend(o.velocities[c]);
             object.push(k);
+            segment.push(o.segment[c]);
             moving.push(u8::from(o.moving));
             speed.push(o.speed);
+            pressure.push(o.pressure[c]);
         }
     }
     let cells = object.len();
@@ -226,8 +243,10 @@ pub fn walls_vtu_string(outlines: &[Outline], time: Real) -> String {
     out.push_str("      </PointData>\n");
     out.push_str("      <CellData Scalars=\"object\">\n");
     push_scalars(&mut out, "object", object.into_iter().map(|k| k as i32));
+    push_scalars(&mut out, "segment", segment.into_iter().map(|s| s as i32));
     push_scalars(&mut out, "moving", moving.into_iter());
     push_scalars(&mut out, "speed", speed.into_iter());
+    push_scalars(&mut out, "pressure", pressure.into_iter());
     out.push_str("      </CellData>\n");
     push_geometry(
         &mut out,

@@ -36,6 +36,9 @@ pub enum ApiError {
         worker: String,
         dir: String,
     },
+    /// `message` names the bodies and walls the job has.
+    #[error("job {id}: {message}")]
+    BodyNotFound { id: String, message: String },
     #[error("no route for {0}")]
     RouteNotFound(String),
     #[error("method not allowed")]
@@ -62,7 +65,8 @@ impl ApiError {
             Self::JobNotFound(_)
             | Self::RouteNotFound(_)
             | Self::NoSnapshots(_)
-            | Self::SnapshotsElsewhere { .. } => StatusCode::NOT_FOUND,
+            | Self::SnapshotsElsewhere { .. }
+            | Self::BodyNotFound { .. } => StatusCode::NOT_FOUND,
             Self::Unauthorized(_) => StatusCode::UNAUTHORIZED,
             Self::AlreadyFinished { .. } => StatusCode::CONFLICT,
             Self::MethodNotAllowed => StatusCode::METHOD_NOT_ALLOWED,
@@ -82,6 +86,7 @@ impl ApiError {
             Self::JobNotFound(_) => "job_not_found",
             Self::AlreadyFinished { .. } => "job_finished",
             Self::NoSnapshots(_) | Self::SnapshotsElsewhere { .. } => "no_snapshots",
+            Self::BodyNotFound { .. } => "body_not_found",
             Self::RouteNotFound(_) => "route_not_found",
             Self::MethodNotAllowed => "method_not_allowed",
             Self::ShuttingDown => "shutting_down",

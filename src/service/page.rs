@@ -2,8 +2,8 @@
 //! document, no framework and nothing fetched from elsewhere, so it works offline. It
 //! shows the status and progress (reloading every few seconds while the job is not
 //! finished), the advice on a case outside the validated envelope (from submission on), the load
-//! plot and the flow pictures with a time slider, all drawn by the service's own SVG
-//! routes.
+//! plot and the flow pictures with a time slider, the pressure along each body's surface
+//! under them following the same slider, all drawn by the service's own SVG routes.
 //!
 //! Each picture's `<img>` gets `data-rendered="yes"` once it has loaded with a non-zero
 //! size (`"no"` on an error), which is what the browser test reads.
@@ -48,15 +48,40 @@ if (flow) {
     label.textContent = "t = " + (t * 1e3).toFixed(3) + " ms";
     flow.dataset.rendered = "";
     flow.src = flow.dataset.base + "?time=" + t + "&field=" + field.value;
+    document.querySelectorAll("img.surface").forEach((img) => {
+      img.dataset.rendered = "";
+      img.src = img.dataset.base + "&time=" + t;
+    });
   };
   slider.addEventListener("input", show);
   field.addEventListener("change", show);
 }
 "#;
 
+/// `text` as a URL query value: unreserved characters kept, every other byte of its UTF-8
+/// as `%XX`.
+fn query_value(text: &str) -> String {
+    text.bytes()
+        .map(|b| match b {
+            b'A'..=b'Z' | b'a'..=b'z' | b'0'..=b'9' | b'-' | b'.' | b'_' | b'~' => {
+                (b as char).to_string()
+            }
+            _ => format!("%{b:02X}"),
+        })
+        .collect()
+}
+
 /// The page of job `row` (`json`: its record as the API serves it; `advice`: what
-/// `mpsfsi check` advises its case; `snapshot_times`: the snapshots written so far).
-pub fn job_page(row: &JobRow, json: &Value, advice: &[String], snapshot_times: &[f64]) -> String {
+/// `mpsfsi check` advises its case; `bodies`: the names of its bodies, each drawn with
+/// the pressure along its surface under the flow; `snapshot_times`: the snapshots
+/// written so far).
+pub fn job_page(
+    row: &JobRow,
+    json: &Value,
+    advice: &[String],
+    bodies: &[String],
+    snapshot_times: &[f64],
+) -> String {
     let base = format!("/v1/jobs/{}", row.id);
     let name = escape(&row.name);
     let status = row.status.as_str();
@@ -135,6 +160,16 @@ pub fn job_page(row: &JobRow, json: &Value, advice: &[String], snapshot_times: &
                 "<img id=\"flow\" alt=\"flow picture\" data-base=\"{base}/snapshot.svg\" data-times=\"{}\" src=\"{base}/snapshot.svg?time={last}&amp;field=pressure\">",
                 escape(&times)
             );
+            for (k, body) in bodies.iter().enumerate() {
+                let surface = format!("{base}/surface.svg?body={}", query_value(body));
+                let _ = writeln!(
+                    html,
+                    "<br><img class=\"surface\" id=\"surface-{k}\" alt=\"pressure along {}\" data-base=\"{}\" src=\"{}&amp;time={last}\">",
+                    escape(body),
+                    escape(&surface),
+                    escape(&surface)
+                );
+            }
         }
     }
     if let Some(summary) = json.get("summary").filter(|s| !s.is_null()) {

@@ -12,6 +12,7 @@ use crate::output::flow::{
 };
 use crate::output::plot::PlotError;
 use crate::output::series::{complete_lines, csv_to_columns};
+use crate::output::surface::{surface_svg, surface_title, Objects};
 use axum::body::Bytes;
 use axum::extract::rejection::{BytesRejection, QueryRejection};
 use axum::extract::{DefaultBodyLimit, Path, Query, State};
@@ -75,6 +76,11 @@ pub fn endpoints() -> Vec<(Method, &'static str, MethodRouter<AppState>)> {
             "/v1/jobs/{id}/snapshot.svg",
             on(MethodFilter::GET, get_snapshot_svg),
         ),
+        (
+            Method::GET,
+            "/v1/jobs/{id}/surface.svg",
+            on(MethodFilter::GET, get_surface_svg),
+        ),
         (Method::GET, "/v1/health", on(MethodFilter::GET, health)),
         (
             Method::GET,
@@ -137,6 +143,7 @@ pub fn job_json(row: &JobRow) -> Value {
             "loads": format!("{base}/loads"),
             "loads_svg": format!("{base}/loads.svg"),
             "snapshot_svg": format!("{base}/snapshot.svg"),
+            "surface_svg": format!("{base}/surface.svg"),
             "bodies": format!("{base}/bodies"),
             "probes": format!("{base}/probes"),
             "cancel": format!("{base}/cancel"),
@@ -324,13 +331,16 @@ async fn get_job(
             .map_err(ApiError::internal)?;
         // the advice `mpsfsi check` gives the case, on the page from submission on (the
         // summary carries it only once the run ends)
-        let advice = match state.jobs.store.case_text(row.id).await? {
-            Some(text) => parse_case_str(&text)
-                .map(|case| impact_advice(&case))
-                .unwrap_or_default(),
-            None => Vec::new(),
+        let case = match state.jobs.store.case_text(row.id).await? {
+            Some(text) => parse_case_str(&text).ok(),
+            None => None,
         };
-        let html = super::page::job_page(&row, &job_json(&row), &advice, &times);
+        let advice = case.as_ref().map(impact_advice).unwrap_or_default();
+        let bodies: Vec<String> = case
+            .iter()
+            .flat_map(|c| c.bodies.iter().map(|b| b.name.clone()))
+            .collect();
+        let html = super::page::job_page(&row, &job_json(&row), &advice, &bodies, &times);
         return Ok(([(header::CONTENT_TYPE, "text/html; charset=utf-8")], html).into_response());
     }
     Ok(Json(job_json(&row)).into_response())
@@ -495,23 +505,99 @@ async fn get_snapshot_svg(
     let row = find_job(&state, &id).await?;
     let dir = run_dir(&state, &row);
     let svg = tokio::task::spawn_blocking(move || {
-        let snapshot = read_snapshot(&dir, query.time).map_err(|e| match e {
-            SnapshotError::None if !dir.is_dir() && row.run_dir.is_some() => {
-                ApiError::SnapshotsElsewhere {
-                    id,
-                    worker: row.worker.unwrap_or_default(),
-                    dir: row.run_dir.unwrap_or_default(),
-                }
-            }
-            SnapshotError::None => ApiError::NoSnapshots(id),
-            SnapshotError::Io(e) => ApiError::internal(e),
-        })?;
+        let snapshot = read_snapshot(&dir, query.time)
+            .map_err(|e| snapshot_error(e, &dir, row.clone(), id))?;
         flow_svg(&snapshot, field, window, &title(&row.name, &snapshot))
             .map(|(svg, _)| svg)
-            .map_err(|e| match e {
-                PlotError::Data(m) => ApiError::BadRequest(m),
-                e => ApiError::internal(e),
-            })
+            .map_err(plot_error)
+    })
+    .await
+    .map_err(ApiError::internal)??;
+    Ok(([(header::CONTENT_TYPE, "image/svg+xml")], svg).into_response())
+}
+
+/// The error of a snapshot that cannot be read: none written (or written on a worker
+/// whose directory this node cannot read), or an I/O failure.
+fn snapshot_error(e: SnapshotError, dir: &std::path::Path, row: JobRow, id: String) -> ApiError {
+    match e {
+        SnapshotError::None if !dir.is_dir() && row.run_dir.is_some() => {
+            ApiError::SnapshotsElsewhere {
+                id,
+                worker: row.worker.unwrap_or_default(),
+                dir: row.run_dir.unwrap_or_default(),
+            }
+        }
+        SnapshotError::None => ApiError::NoSnapshots(id),
+        SnapshotError::Io(e) => ApiError::internal(e),
+    }
+}
+
+/// A picture that cannot be drawn: from what the request asked (400), or not (500).
+fn plot_error(e: PlotError) -> ApiError {
+    match e {
+        PlotError::Data(m) => ApiError::BadRequest(m),
+        e => ApiError::internal(e),
+    }
+}
+
+/// The wall objects of a job, in the order of its loads: from the case it was submitted
+/// with (every node has it), else from its run directory.
+async fn job_objects(
+    state: &AppState,
+    row: &JobRow,
+    dir: std::path::PathBuf,
+) -> Result<Objects, ApiError> {
+    if let Some(text) = state.jobs.store.case_text(row.id).await? {
+        if let Ok(case) = parse_case_str(&text) {
+            return Ok(Objects::of_case(&case));
+        }
+    }
+    tokio::task::spawn_blocking(move || Objects::of_run(&dir))
+        .await
+        .map_err(ApiError::internal)?
+        .map_err(ApiError::internal)
+}
+
+#[derive(Debug, Deserialize)]
+struct SurfaceQuery {
+    body: Option<String>,
+    time: Option<f64>,
+}
+
+#[tracing::instrument(name = "get surface plot", skip(state))]
+async fn get_surface_svg(
+    State(state): State<AppState>,
+    Path(id): Path<String>,
+    query: Result<Query<SurfaceQuery>, QueryRejection>,
+) -> Result<Response, ApiError> {
+    let Query(query) = query.map_err(|e| ApiError::BadRequest(e.body_text()))?;
+    let body = query.body.ok_or(ApiError::BadParameter {
+        path: "body",
+        message: "the name of a body (or wall) of the job is required".into(),
+    })?;
+    if query.time.is_some_and(|t| !t.is_finite()) {
+        return Err(ApiError::BadRequest(
+            "time must be a finite number of seconds".into(),
+        ));
+    }
+    let row = find_job(&state, &id).await?;
+    let dir = run_dir(&state, &row);
+    let object = job_objects(&state, &row, dir.clone())
+        .await?
+        .find(&body)
+        .map_err(|message| ApiError::BodyNotFound {
+            id: id.clone(),
+            message,
+        })?;
+    let svg = tokio::task::spawn_blocking(move || {
+        let snapshot = read_snapshot(&dir, query.time)
+            .map_err(|e| snapshot_error(e, &dir, row.clone(), id))?;
+        surface_svg(
+            &snapshot,
+            object,
+            &surface_title(&row.name, &body, &snapshot),
+        )
+        .map_err(plot_error)
     })
     .await
     .map_err(ApiError::internal)??;

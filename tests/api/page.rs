@@ -1,7 +1,8 @@
 //! The job page (`GET /v1/jobs/{id}` with `Accept: text/html`, src/service/page.rs) in a
 //! real headless browser, Debian's Chromium (issue 23): a wedge entering a small tank is
-//! run to the end, the page's DOM after load must mark both pictures as rendered, and a
-//! screenshot must show them (not blank, not broken-image icons).
+//! run to the end, the page's DOM after load must mark its pictures (loads, flow, the
+//! pressure along the wedge) as rendered, and a screenshot must show them (not blank, not
+//! broken-image icons).
 //!
 //! Without Chromium the browser half is skipped with a note, except under CI (the `CI`
 //! environment variable set), where it fails: `.ci/run` installs the package.
@@ -38,9 +39,9 @@ const CHROMIUM_FLAGS: [&str; 8] = [
 const VIRTUAL_TIME_BUDGET_MS: u32 = 15_000;
 
 /// The screenshot's window: 1300 px wide, the page's `max-width`, so the 1180 px flow
-/// picture is drawn at its own size; 2200 px tall, so both pictures are in it whole (the
-/// flow picture ends near y = 2120 with Debian's fonts).
-const WINDOW: &str = "--window-size=1300,2200";
+/// picture is drawn at its own size; 2900 px tall, so all three pictures are in it whole
+/// (the surface picture under the flow ends near y = 2860 with Debian's fonts).
+const WINDOW: &str = "--window-size=1300,2900";
 
 /// A tank like `helpers::tiny_case`, wider and deeper (40 x 15 particles), with gravity and
 /// a wedge whose apex starts 1 cm above the water, pushed down at 1 m/s: by the end it has
@@ -68,7 +69,7 @@ fn wedge_case() -> Value {
 }
 
 #[tokio::test(flavor = "multi_thread", worker_threads = 2)]
-async fn job_page_renders_both_pictures_in_headless_chromium() {
+async fn job_page_renders_its_pictures_in_headless_chromium() {
     let started = Instant::now();
     let app = spawn_app("page", |_| {}).await;
     let case = wedge_case();
@@ -96,6 +97,10 @@ async fn job_page_renders_both_pictures_in_headless_chromium() {
         "<img id=\"flow\"".into(),
         "<input id=\"time\" type=\"range\"".into(),
         "<select id=\"field\">".into(),
+        format!(
+            "<img class=\"surface\" id=\"surface-0\" alt=\"pressure along wedge\" \
+             data-base=\"{path}/surface.svg?body=wedge\""
+        ),
     ] {
         assert!(html.contains(&part), "the page lacks {part:?}:\n{html}");
     }
@@ -147,7 +152,7 @@ async fn job_page_renders_both_pictures_in_headless_chromium() {
     )
     .await;
     let dom = String::from_utf8_lossy(&dom);
-    for image in ["loads", "flow"] {
+    for image in ["loads", "flow", "surface-0"] {
         let tag = img_tag(&dom, image)
             .unwrap_or_else(|| panic!("no <img id={image:?}> in the DOM:\n{dom}"));
         assert!(
@@ -160,7 +165,7 @@ async fn job_page_renders_both_pictures_in_headless_chromium() {
         "status not shown as succeeded:\n{dom}"
     );
 
-    // The screenshot: both pictures there and drawn.
+    // The screenshot: the three pictures there and drawn.
     let shot = scratch.join("page.png");
     run_chromium(
         &browser,
@@ -349,7 +354,8 @@ fn ink(p: &Picture, b: &ImageBox) -> Ink {
     }
 }
 
-/// The screenshot shows the two pictures, loads above flow, both drawn.
+/// The screenshot shows the three pictures, loads above flow above the pressure along the
+/// wedge, all drawn.
 ///
 /// Thresholds, a quarter to a third of what this case measured with Debian's Chromium
 /// (156) at 1300 px. The loads plot is mostly white with grey grid lines, black text and
@@ -357,24 +363,29 @@ fn ink(p: &Picture, b: &ImageBox) -> Ink {
 /// coloured, 178 colours), so it needs 3 % non-white, 0.5 % coloured (the series lines,
 /// absent from empty axes) and 40 colours. The flow picture is covered by particles in
 /// the viridis map (43 % non-white, 41 % coloured, 108 colours), so it needs 15 % of each
-/// (the colour bar alone is 2.4 %) and 30 colours. A broken image has no box (an icon and
-/// its alt text), a blank one has nothing drawn: both fail, as does a blank page.
+/// (the colour bar alone is 2.4 %) and 30 colours. The surface picture is white with black
+/// axes, grey vertex marks and one blue line per face (measured: 3.1 % non-white, 0.60 %
+/// coloured, 43 colours), so it needs 1 %, 0.15 % (the lines) and 10 colours. A broken
+/// image has no box (an icon and its alt text), a blank one has nothing drawn: all fail,
+/// as does a blank page.
 fn check_screenshot(png: &[u8]) -> Result<(), String> {
     let picture = Picture::decode(png)?;
     let boxes = image_boxes(&picture);
-    let [loads, flow] = boxes.as_slice() else {
+    let [loads, flow, surface] = boxes.as_slice() else {
         return Err(format!(
-            "expected two picture boxes (loads, flow), found {boxes:?}"
+            "expected three picture boxes (loads, flow, surface), found {boxes:?}"
         ));
     };
     let (l, f) = (ink(&picture, loads), ink(&picture, flow));
+    let s = ink(&picture, surface);
     let loads_ok = l.non_white >= 0.03 && l.chromatic >= 0.005 && l.colours >= 40;
     let flow_ok = f.non_white >= 0.15 && f.chromatic >= 0.15 && f.colours >= 30;
-    if loads_ok && flow_ok {
+    let surface_ok = s.non_white >= 0.01 && s.chromatic >= 0.0015 && s.colours >= 10;
+    if loads_ok && flow_ok && surface_ok {
         Ok(())
     } else {
         Err(format!(
-            "a picture looks empty: loads {loads:?} {l:?}, flow {flow:?} {f:?}"
+            "a picture looks empty: loads {loads:?} {l:?}, flow {flow:?} {f:?}, surface {surface:?} {s:?}"
         ))
     }
 }

@@ -223,6 +223,88 @@ async fn a_job_without_snapshots_answers_404_for_its_flow_picture() {
     assert_eq!(status, 404);
     assert_eq!(body["error"]["code"], "no_snapshots");
     assert_conforms("GET", "/v1/jobs/{id}/snapshot.svg", 404, &body);
+    let (status, body) = app
+        .get_json(&format!("/v1/jobs/{quiet_id}/surface.svg?body=tank"))
+        .await;
+    assert_eq!(status, 404);
+    assert_eq!(body["error"]["code"], "no_snapshots");
+    assert_conforms("GET", "/v1/jobs/{id}/surface.svg", 404, &body);
+    app.stop().await;
+}
+
+/// The pressure along a body is output::surface::surface_svg of the snapshot nearest the
+/// time asked (the tiny tank with a box pushed into it); an unknown body answers 404 with
+/// the job's bodies and walls named, and a request without `body` 400.
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn the_surface_picture_draws_a_body_and_refuses_an_unknown_one() {
+    use mpsfsi::output::surface::{surface_svg, surface_title};
+    let app = spawn_app("surface", |_| {}).await;
+    let mut case = tiny_case(0.004);
+    case["bodies"] = serde_json::json!([{
+        "name": "float",
+        "polygon": [[-0.02, 0.0], [0.02, 0.0], [0.02, 0.02], [-0.02, 0.02]],
+        "position": [0.15, 0.102],
+        "motion": { "type": "prescribed", "velocity": [0.0, -1.0] }
+    }]);
+    let id = app.submit(&case).await;
+    let job = app.wait_finished(&id).await;
+    assert_eq!(job["status"], "succeeded", "{job:#}");
+    assert_eq!(
+        job["links"]["surface_svg"],
+        format!("/v1/jobs/{id}/surface.svg")
+    );
+
+    let svg = app
+        .get_svg(&format!("/v1/jobs/{id}/surface.svg?body=float&time=0.002"))
+        .await;
+    let dir = app.data_dir.join("jobs").join(&id);
+    let snapshot = mpsfsi::output::flow::read_snapshot(&dir, Some(0.002)).unwrap();
+    let name = case["name"].as_str().unwrap();
+    // the box is the second object: the tank's loads come first
+    let direct = surface_svg(&snapshot, 1, &surface_title(name, "float", &snapshot)).unwrap();
+    assert_eq!(svg, direct);
+    assert!(svg.contains("Cp = p"), "a moving body's pressure as Cp");
+    // the last snapshot by default; a wall by its name
+    let last = app
+        .get_svg(&format!("/v1/jobs/{id}/surface.svg?body=float"))
+        .await;
+    assert!(last.contains("t = 4.0"), "the last snapshot, at 4 ms");
+    assert!(app
+        .get_svg(&format!("/v1/jobs/{id}/surface.svg?body=tank"))
+        .await
+        .contains("p (kPa)"));
+
+    let (status, body) = app
+        .get_json(&format!("/v1/jobs/{id}/surface.svg?body=hull"))
+        .await;
+    assert_eq!(status, 404, "{body}");
+    assert_eq!(body["error"]["code"], "body_not_found");
+    let message = body["error"]["message"].as_str().unwrap();
+    assert!(
+        message.contains("\"hull\"") && message.contains("bodies: float; walls: tank"),
+        "{message}"
+    );
+    assert_conforms("GET", "/v1/jobs/{id}/surface.svg", 404, &body);
+    let unknown_job = "00000000-0000-0000-0000-000000000000";
+    let (status, body) = app
+        .get_json(&format!("/v1/jobs/{unknown_job}/surface.svg?body=float"))
+        .await;
+    assert_eq!(
+        (status, body["error"]["code"].as_str()),
+        (404, Some("job_not_found"))
+    );
+    for (query, path) in [("", Some("body")), ("body=float&time=abc", None)] {
+        let (status, body) = app
+            .get_json(&format!("/v1/jobs/{id}/surface.svg?{query}"))
+            .await;
+        assert_eq!(
+            (status, body["error"]["code"].as_str()),
+            (400, Some("bad_request")),
+            "{query}: {body}"
+        );
+        assert_eq!(body["error"]["path"].as_str(), path, "{query}");
+        assert_conforms("GET", "/v1/jobs/{id}/surface.svg", 400, &body);
+    }
     app.stop().await;
 }
 

@@ -421,6 +421,101 @@ fn plot_draws_a_snapshot_of_a_run_and_refuses_what_it_cannot_draw() {
     );
 }
 
+/// `plot --surface`: the pressure along a body of the tiny tank (a box pushed into it at
+/// 1 m/s, so Cp), along a wall (still, so kPa); an unknown name is refused with the
+/// bodies and walls listed, and `--surface` does not go with `--field` or `--window`.
+#[test]
+fn plot_surface_draws_the_pressure_along_a_body_and_names_the_bodies_it_has() {
+    let dir = scratch("plot-surface");
+    let body = r#"bodies=[{"name": "float", "polygon": [[-0.02, 0.0], [0.02, 0.0], [0.02, 0.02], [-0.02, 0.02]], "position": [0.05, 0.052], "motion": {"type": "prescribed", "velocity": [0.0, -1.0]}}]"#;
+    let run = mpsfsi(&[
+        "run",
+        tiny().to_str().unwrap(),
+        "--out",
+        dir.to_str().unwrap(),
+        "--set",
+        body,
+    ]);
+    assert!(run.status.success(), "{}", text(&run.stderr));
+    let svg = dir.join("surface.svg");
+    let out = mpsfsi(&[
+        "plot",
+        dir.to_str().unwrap(),
+        "--surface",
+        "float",
+        "--time",
+        "0.005",
+        "--out",
+        svg.to_str().unwrap(),
+    ]);
+    assert!(out.status.success(), "{}", text(&out.stderr));
+    // the snapshot nearest 5 ms (one every millisecond, each at the first step after its time)
+    let stdout = text(&out.stdout);
+    let t: f64 = stdout
+        .strip_prefix("t = ")
+        .and_then(|rest| rest.split(' ').next())
+        .and_then(|t| t.parse().ok())
+        .unwrap_or_else(|| panic!("{stdout}"));
+    assert!((t - 0.005).abs() < 1e-3, "{stdout}");
+    let picture = std::fs::read_to_string(&svg).unwrap();
+    // the case's name and the time in the title; Cp against the arc length, one line
+    // per face of the box
+    for part in [
+        &format!(
+            "tiny-water-block: pressure along float, t = {:.3} ms",
+            t * 1e3
+        ),
+        "Cp = p / (½ρV²), V = 1.000 m/s",
+        "along the surface from vertex 0 (m)",
+    ] {
+        assert!(picture.contains(part), "{part:?} missing");
+    }
+    assert_eq!(picture.matches("stroke-width=\"2\"").count(), 4);
+    let tank = mpsfsi(&[
+        "plot",
+        dir.to_str().unwrap(),
+        "--surface",
+        "tank",
+        "--out",
+        svg.to_str().unwrap(),
+    ]);
+    assert!(tank.status.success(), "{}", text(&tank.stderr));
+    assert!(std::fs::read_to_string(&svg).unwrap().contains("p (kPa)"));
+
+    let unknown = mpsfsi(&[
+        "plot",
+        dir.to_str().unwrap(),
+        "--surface",
+        "hull",
+        "--out",
+        "x.svg",
+    ]);
+    assert_eq!(unknown.status.code(), Some(2));
+    assert!(
+        text(&unknown.stderr)
+            .contains("no body named \"hull\" in this run (bodies: float; walls: tank)"),
+        "{}",
+        text(&unknown.stderr)
+    );
+    for other in [["--field", "speed"], ["--window", "0,1,0,1"]] {
+        let both = mpsfsi(&[
+            "plot",
+            dir.to_str().unwrap(),
+            "--surface",
+            "float",
+            other[0],
+            other[1],
+            "--out",
+            "x.svg",
+        ]);
+        assert_eq!(both.status.code(), Some(2), "{other:?}");
+        assert!(
+            text(&both.stderr).contains("cannot be used with"),
+            "{other:?}"
+        );
+    }
+}
+
 #[test]
 fn check_reports_the_layout_of_each_spacing() {
     let wedge = shipped_wedge();

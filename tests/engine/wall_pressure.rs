@@ -9,7 +9,7 @@
 use mpsfsi::engine::kernel::{Kernel, Koshizuka};
 use mpsfsi::engine::neighbors::CellGrid;
 use mpsfsi::engine::resolution::Scales;
-use mpsfsi::engine::walls::pressure_load::pressure_loads;
+use mpsfsi::engine::walls::pressure_load::{pressure_loads, surface_pressures};
 use mpsfsi::engine::walls::{PlacedWall, WallObject, WallState};
 use mpsfsi::geometry::WallShape;
 use mpsfsi::math::Vec2;
@@ -78,7 +78,7 @@ fn loads(x: &[Vec2], walls: &[PlacedWall]) -> Vec<(Vec2, f64)> {
     let p: Vec<f64> = x.iter().map(|q| RHO * G * (DEPTH - q.y)).collect();
     let grid = CellGrid::build(x, re);
     let w = |d: f64| Koshizuka::w(d, re);
-    pressure_loads(
+    let surfaces = surface_pressures(
         x,
         &p,
         Scales::UNIFORM,
@@ -89,7 +89,8 @@ fn loads(x: &[Vec2], walls: &[PlacedWall]) -> Vec<(Vec2, f64)> {
         Vec2::new(0.0, -G),
         L0,
         re,
-    )
+    );
+    pressure_loads(walls, &surfaces)
 }
 
 fn assert_close(what: &str, got: f64, expected: f64, tol: f64) {

@@ -635,8 +635,10 @@ fn the_surge_front_history_reads_the_particles_part_of_each_snapshot() {
     let tank =
         [[0.0, 1.2], [0.0, 0.0], [4.0 * a, 0.0], [4.0 * a, 1.2]].map(|p| Vec2::new(p[0], p[1]));
     let walls = Outline {
-        segments: tank.windows(2).map(|w| [w[0], w[1]]).collect(),
+        cells: tank.windows(2).map(|w| [w[0], w[1]]).collect(),
         velocities: vec![[Vec2::zeros(); 2]; 3],
+        segment: vec![0, 1, 2],
+        pressure: vec![0.0; 3],
         moving: false,
         speed: 0.0,
     };

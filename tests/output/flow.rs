@@ -82,10 +82,54 @@ fn the_walls_file_holds_each_surface_at_its_pose() {
         let walls = s.walls.expect("a walls file beside every particle file");
         let moving = walls.cell_scalar("moving").unwrap();
         let object = walls.cell_scalar("object").unwrap();
+        let segment = walls.cell_scalar("segment").unwrap();
         let speed = walls.cell_scalar("speed").unwrap();
-        // the tank: 3 segments, fixed; the box: 4 segments, moving at |V|
-        assert_eq!(walls.cells, 7);
-        assert_eq!(moving.iter().filter(|m| **m == 1.0).count(), 4);
+        let pressure = walls.cell_scalar("pressure").unwrap();
+        // the tank: 3 segments, fixed; the box: 4 segments, moving at |V|; each segment
+        // cut into pieces of equal length, at most l0/2 (the load integral's), which
+        // together make the segment
+        let mut segments: std::collections::BTreeMap<_, Vec<([f64; 3], [f64; 3])>> =
+            Default::default();
+        for k in 0..walls.cells {
+            let [a, b] = [0, 1].map(|e| walls.points[walls.cell(k)[e]]);
+            let length = (b[0] - a[0]).hypot(b[1] - a[1]);
+            assert!(length <= 0.005 * (1.0 + 1e-9), "cell {k}: {length} m");
+            let pieces: &mut Vec<_> = segments
+                .entry((object[k] as u32, segment[k] as u32))
+                .or_default();
+            if let Some(&(_, end)) = pieces.last() {
+                assert!(
+                    [0, 1].iter().all(|&c| (a[c] - end[c]).abs() < 1e-12),
+                    "cell {k} starts where the one before it ends"
+                );
+            }
+            pieces.push((a, b));
+            assert!(pressure[k] >= 0.0 && pressure[k].is_finite());
+        }
+        let keys: Vec<_> = segments.keys().copied().collect();
+        let expected: Vec<(u32, u32)> = (0..3)
+            .map(|s| (0, s))
+            .chain((0..4).map(|s| (1, s)))
+            .collect();
+        assert_eq!(keys, expected, "(object, segment) of the cells");
+        for ((o, s), pieces) in &segments {
+            let lengths: Vec<f64> = pieces
+                .iter()
+                .map(|(a, b)| (b[0] - a[0]).hypot(b[1] - a[1]))
+                .collect();
+            assert!(
+                lengths.iter().all(|l| (l - lengths[0]).abs() < 1e-12),
+                "object {o} segment {s}: equal pieces {lengths:?}"
+            );
+        }
+        assert_eq!(
+            moving.iter().filter(|m| **m == 1.0).count(),
+            segments
+                .iter()
+                .filter(|((o, _), _)| *o == 1)
+                .map(|(_, p)| p.len())
+                .sum::<usize>()
+        );
         let mut corners = Vec::new();
         for k in 0..walls.cells {
             assert_eq!(walls.cell(k).len(), 2, "a line cell");
@@ -330,12 +374,14 @@ import json, sys, meshio
 m = meshio.read(sys.argv[1])
 lines = [c for c in m.cells if c.type == "line"]
 moving = m.cell_data["moving"]
-out = []
-for block, flags in zip(m.cells, moving):
-    for cell, flag in zip(block.data, flags):
+pressure = m.cell_data["pressure"]
+out, p = [], []
+for block, flags, values in zip(m.cells, moving, pressure):
+    for cell, flag, value in zip(block.data, flags, values):
         if flag == 1:
             out.extend(m.points[i][:2].tolist() for i in cell)
-print(json.dumps({"line_blocks": len(lines), "body_points": out}))
+            p.append(value.item())
+print(json.dumps({"line_blocks": len(lines), "body_points": out, "body_pressure": p}))
 "#;
     let output = std::process::Command::new("python3")
         .arg("-c")
@@ -351,7 +397,23 @@ print(json.dumps({"line_blocks": len(lines), "body_points": out}))
     let report: Value = serde_json::from_slice(&output.stdout).unwrap();
     assert!(report["line_blocks"].as_u64().unwrap() >= 1);
     let points = report["body_points"].as_array().unwrap();
-    assert_eq!(points.len(), 8, "four edges of two points");
+    let pressure = report["body_pressure"].as_array().unwrap();
+    assert_eq!(points.len(), 2 * pressure.len(), "line cells of two points");
+    // the four edges, cut into pieces of at most l0/2: at least 2 * 0.3 m / 5 mm of them
+    assert!(pressure.len() >= 60, "{} cells", pressure.len());
+    // by 0.03 s the box is 1 cm into the water: its bottom is pressed
+    assert!(pressure.iter().any(|p| p.as_f64().unwrap() > 0.0));
+    for p in &points[..] {
+        let (x, y) = (p[0].as_f64().unwrap(), p[1].as_f64().unwrap());
+        let [x0, y0] = vertex_at(0, s.time);
+        let [x1, y1] = vertex_at(2, s.time);
+        let near = |a: f64, b: f64| (a - b).abs() < 1e-8;
+        let within = |a: f64, lo: f64, hi: f64| a > lo - 1e-8 && a < hi + 1e-8;
+        let side = (near(x, x0) || near(x, x1)) && within(y, y0, y1);
+        let top_or_bottom = (near(y, y0) || near(y, y1)) && within(x, x0, x1);
+        let on_edge = side || top_or_bottom;
+        assert!(on_edge, "({x}, {y}) is on the box's outline");
+    }
     for k in 0..4 {
         let [x, y] = vertex_at(k, s.time);
         assert!(

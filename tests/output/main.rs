@@ -6,6 +6,7 @@ mod bench_scaling;
 mod filter;
 mod flow;
 mod plot;
+mod surface;
 mod vtk;
 
 /// A small hydrostatic tank (20 x 10 particles) as a case value.
