@@ -17,6 +17,9 @@ const C_WAGNER: f64 = 23.26;
 /// Jet root at the chine: B tan(beta) / (pi V).
 const T_CHINE: f64 = 0.5 * 0.577_350_269 / (std::f64::consts::PI * V);
 
+/// A gauge's name, height above the keel (m) and reading at every step, (time, Cp).
+pub type GaugeSeries = (String, f64, Vec<(f64, f64)>);
+
 pub struct WedgeFit {
     pub spacing: f64,
     /// C_F with the time origin at the keel contact (the t of docs/references.md): the
@@ -42,7 +45,7 @@ pub struct WedgeFit {
     pub profile: Vec<(f64, f64)>,
     /// The case's gauges: name, height above the keel (m) and their reading at every
     /// step, (time, Cp).
-    pub gauges: Vec<(String, f64, Vec<(f64, f64)>)>,
+    pub gauges: Vec<GaugeSeries>,
     pub particles: usize,
     pub particle_steps: u64,
     pub steps: usize,
@@ -57,7 +60,7 @@ pub fn wedge_fit(overrides: &[String]) -> WedgeFit {
     let case = shipped("wedge_30deg_constant_velocity.json", overrides);
     let mut profile = PressureProfile::new(case.particle_spacing, case.scheme.radius);
     let mut points = None;
-    let mut gauges: Vec<(String, f64, Vec<(f64, f64)>)> = case
+    let mut gauges: Vec<GaugeSeries> = case
         .output
         .probes
         .iter()

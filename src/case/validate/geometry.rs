@@ -303,7 +303,7 @@ pub(super) fn check_output(case: &Case) -> Check {
 /// A gauge names a body and sits on its surface (in the body's frame), within half a
 /// spacing: farther out it would read the fluid beside the body, not the surface.
 fn check_gauge(case: &Case, i: usize, probe: &crate::case::Probe, name: &str) -> Check {
-    let Some(body) = case.bodies.iter().find(|b| &b.name == name) else {
+    let Some(body) = case.bodies.iter().find(|b| b.name == name) else {
         let names: Vec<&str> = case.bodies.iter().map(|b| b.name.as_str()).collect();
         return reject(
             format!("output.probes[{i}].body"),
