@@ -38,8 +38,20 @@ pub fn plot(
         .file_name()
         .map(|n| n.to_string_lossy().into_owned())
         .unwrap_or_default();
-    let svg = match flow_svg(&snapshot, field, window, &title(&name, &snapshot)) {
-        Ok((svg, _)) => svg,
+    let svg = flow_svg(&snapshot, field, window, &title(&name, &snapshot)).map(|(svg, _)| svg);
+    let what = format!("{} particles", snapshot.particles.points.len());
+    write_svg(svg, out, snapshot.time, &what)
+}
+
+/// Write a drawn picture to `out` and say what it shows; the exit code.
+fn write_svg<E: std::fmt::Display>(
+    svg: Result<String, E>,
+    out: &Path,
+    time: f64,
+    what: &str,
+) -> i32 {
+    let svg = match svg {
+        Ok(svg) => svg,
         Err(e) => {
             eprintln!("error: {e}");
             return EXIT_ERROR;
@@ -49,12 +61,7 @@ pub fn plot(
         eprintln!("error: cannot write {}: {e}", out.display());
         return EXIT_ERROR;
     }
-    println!(
-        "t = {:.6} s ({} particles) -> {}",
-        snapshot.time,
-        snapshot.particles.points.len(),
-        out.display()
-    );
+    println!("t = {time:.6} s ({what}) -> {}", out.display());
     0
 }
 
@@ -98,21 +105,6 @@ pub fn plot_surface(run_dir: &Path, time: Option<f64>, body: &str, out: &Path) -
                 .map(|n| n.to_string_lossy().into_owned())
         })
         .unwrap_or_default();
-    let svg = match surface_svg(&snapshot, object, &surface_title(&name, body, &snapshot)) {
-        Ok(svg) => svg,
-        Err(e) => {
-            eprintln!("error: {e}");
-            return EXIT_ERROR;
-        }
-    };
-    if let Err(e) = std::fs::write(out, svg) {
-        eprintln!("error: cannot write {}: {e}", out.display());
-        return EXIT_ERROR;
-    }
-    println!(
-        "t = {:.6} s (the surface of {body}) -> {}",
-        snapshot.time,
-        out.display()
-    );
-    0
+    let svg = surface_svg(&snapshot, object, &surface_title(&name, body, &snapshot));
+    write_svg(svg, out, snapshot.time, &format!("the surface of {body}"))
 }

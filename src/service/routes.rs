@@ -8,7 +8,8 @@ use super::workers::Jobs;
 use crate::analysis::envelope::impact_advice;
 use crate::case::{parse_case_str, parse_case_value, validate};
 use crate::output::flow::{
-    flow_svg, parse_window, read_snapshot, snapshot_times, title, FlowField, SnapshotError,
+    flow_svg, parse_window, read_snapshot, snapshot_times, title, FlowField, Snapshot,
+    SnapshotError,
 };
 use crate::output::plot::PlotError;
 use crate::output::series::{complete_lines, csv_to_columns};
@@ -504,12 +505,25 @@ async fn get_snapshot_svg(
         .map_err(|e| ApiError::BadRequest(format!("window: {e}")))?;
     let row = find_job(&state, &id).await?;
     let dir = run_dir(&state, &row);
+    draw_snapshot(row, dir, id, query.time, move |snapshot, name| {
+        flow_svg(snapshot, field, window, &title(name, snapshot)).map(|(svg, _)| svg)
+    })
+    .await
+}
+
+/// The picture `draw` makes of the job's snapshot nearest `time` (read and drawn off
+/// the async threads), as an SVG response.
+async fn draw_snapshot(
+    row: JobRow,
+    dir: std::path::PathBuf,
+    id: String,
+    time: Option<f64>,
+    draw: impl FnOnce(&Snapshot, &str) -> Result<String, PlotError> + Send + 'static,
+) -> Result<Response, ApiError> {
     let svg = tokio::task::spawn_blocking(move || {
-        let snapshot = read_snapshot(&dir, query.time)
-            .map_err(|e| snapshot_error(e, &dir, row.clone(), id))?;
-        flow_svg(&snapshot, field, window, &title(&row.name, &snapshot))
-            .map(|(svg, _)| svg)
-            .map_err(plot_error)
+        let snapshot =
+            read_snapshot(&dir, time).map_err(|e| snapshot_error(e, &dir, row.clone(), id))?;
+        draw(&snapshot, &row.name).map_err(plot_error)
     })
     .await
     .map_err(ApiError::internal)??;
@@ -589,19 +603,10 @@ async fn get_surface_svg(
             id: id.clone(),
             message,
         })?;
-    let svg = tokio::task::spawn_blocking(move || {
-        let snapshot = read_snapshot(&dir, query.time)
-            .map_err(|e| snapshot_error(e, &dir, row.clone(), id))?;
-        surface_svg(
-            &snapshot,
-            object,
-            &surface_title(&row.name, &body, &snapshot),
-        )
-        .map_err(plot_error)
+    draw_snapshot(row, dir, id, query.time, move |snapshot, name| {
+        surface_svg(snapshot, object, &surface_title(name, &body, snapshot))
     })
     .await
-    .map_err(ApiError::internal)??;
-    Ok(([(header::CONTENT_TYPE, "image/svg+xml")], svg).into_response())
 }
 
 async fn health(State(state): State<AppState>) -> Result<Json<Value>, ApiError> {
