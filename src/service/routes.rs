@@ -45,7 +45,7 @@ pub fn endpoints() -> Vec<(Method, &'static str, MethodRouter<AppState>)> {
         (
             Method::DELETE,
             "/v1/jobs/{id}",
-            on(MethodFilter::DELETE, cancel_job),
+            on(MethodFilter::DELETE, delete_job),
         ),
         (
             Method::POST,
@@ -372,6 +372,22 @@ async fn cancel_job(
         return Ok((StatusCode::OK, Json(job_json(&row))).into_response());
     }
     Ok((StatusCode::ACCEPTED, Json(job_json(&row))).into_response())
+}
+
+/// Remove the job, its record and its files; a running job is cancelled first (see
+/// [`Jobs::delete`]). Then every route of the job answers 404.
+#[tracing::instrument(name = "delete job", skip(state))]
+async fn delete_job(
+    State(state): State<AppState>,
+    Path(id): Path<String>,
+) -> Result<StatusCode, ApiError> {
+    let uuid = parse_id(&id)?;
+    if state.jobs.delete(uuid).await? {
+        tracing::info!("job deleted");
+        Ok(StatusCode::NO_CONTENT)
+    } else {
+        Err(ApiError::JobNotFound(id))
+    }
 }
 
 /// Whether the Accept header names `media_type` (a browser's `text/html,...`; `*/*`
