@@ -193,7 +193,8 @@ async fn submit_job(
     })?;
     // The job runs from the text as submitted, so it parses exactly as `mpsfsi run` would
     // parse the same file.
-    let case_text: String = if body.iter().all(u8::is_ascii_whitespace) {
+    // empty, not blank: a body of whitespace is not JSON, and is refused as such
+    let case_text: String = if body.is_empty() {
         match super::DEFAULT_CASE {
             Some(text) => text.to_string(),
             None => {
