@@ -4,10 +4,10 @@
 //! can drive the queue without sleeping.
 //!
 //! Cancellation and shutdown reach a run through its [`Observer`], which the engine polls
-//! once per time step: a cancel request (`POST .../cancel`, or `DELETE`, which then deletes
-//! the job) sets the job's cancel flag (the job ends `cancelled`); a
-//! shutdown past its grace period sets the pool's interrupt flag (the job ends `failed`
-//! with reason `interrupted`, exactly as if the process had died). The decision is the
+//! once per time step: a cancel request (`POST .../cancel`, or a `DELETE`, which then
+//! deletes the job) sets the job's cancel flag (the job ends `cancelled`); a shutdown past
+//! its grace period sets the pool's interrupt flag (the job ends `failed` with reason
+//! `interrupted`, exactly as if the process had died). The decision is the
 //! observer's ([`Observer::stop_reason`]), so the job's summary.json says the same as its
 //! record.
 //!
@@ -303,9 +303,9 @@ impl Observer for JobObserver {
             || self.lease_lost.load(Ordering::Relaxed)
     }
 
-    /// A user's cancel request (or DELETE): `cancelled`. Otherwise the service's shutdown stopped the run:
-    /// `failed` / `interrupted`, the contract for a job the service gave up on (as after a
-    /// crash), in summary.json as in the record.
+    /// A user's cancel request (or DELETE): `cancelled`. Otherwise the service's shutdown
+    /// stopped the run: `failed` / `interrupted`, the contract for a job the service gave
+    /// up on (as after a crash), in summary.json as in the record.
     fn stop_reason(&self, step: u64, time: Real) -> (RunStatus, String) {
         if self.cancel.load(Ordering::SeqCst) {
             (
