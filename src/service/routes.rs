@@ -45,7 +45,7 @@ pub fn endpoints() -> Vec<(Method, &'static str, MethodRouter<AppState>)> {
         (
             Method::DELETE,
             "/v1/jobs/{id}",
-            on(MethodFilter::DELETE, cancel_job),
+            on(MethodFilter::DELETE, delete_job),
         ),
         (
             Method::POST,
@@ -193,7 +193,8 @@ async fn submit_job(
     })?;
     // The job runs from the text as submitted, so it parses exactly as `mpsfsi run` would
     // parse the same file.
-    let case_text: String = if body.iter().all(u8::is_ascii_whitespace) {
+    // empty, not blank: a body of whitespace is not JSON, and is refused as such
+    let case_text: String = if body.is_empty() {
         match super::DEFAULT_CASE {
             Some(text) => text.to_string(),
             None => {
@@ -372,6 +373,22 @@ async fn cancel_job(
         return Ok((StatusCode::OK, Json(job_json(&row))).into_response());
     }
     Ok((StatusCode::ACCEPTED, Json(job_json(&row))).into_response())
+}
+
+/// Remove the job, its record and its files; a running job is cancelled first (see
+/// [`Jobs::delete`]). Then every route of the job answers 404.
+#[tracing::instrument(name = "delete job", skip(state))]
+async fn delete_job(
+    State(state): State<AppState>,
+    Path(id): Path<String>,
+) -> Result<StatusCode, ApiError> {
+    let uuid = parse_id(&id)?;
+    if state.jobs.delete(uuid).await? {
+        tracing::info!("job deleted");
+        Ok(StatusCode::NO_CONTENT)
+    } else {
+        Err(ApiError::JobNotFound(id))
+    }
 }
 
 /// Whether the Accept header names `media_type` (a browser's `text/html,...`; `*/*`

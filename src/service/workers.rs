@@ -4,9 +4,10 @@
 //! can drive the queue without sleeping.
 //!
 //! Cancellation and shutdown reach a run through its [`Observer`], which the engine polls
-//! once per time step: `DELETE` sets the job's cancel flag (the job ends `cancelled`); a
-//! shutdown past its grace period sets the pool's interrupt flag (the job ends `failed`
-//! with reason `interrupted`, exactly as if the process had died). The decision is the
+//! once per time step: a cancel request (`POST .../cancel`, or a `DELETE`, which then
+//! deletes the job) sets the job's cancel flag (the job ends `cancelled`); a shutdown past
+//! its grace period sets the pool's interrupt flag (the job ends `failed` with reason
+//! `interrupted`, exactly as if the process had died). The decision is the
 //! observer's ([`Observer::stop_reason`]), so the job's summary.json says the same as its
 //! record.
 //!
@@ -15,6 +16,11 @@
 //! cancellation requested through any API node, and a lost lease stops the run. The
 //! run's CSV files are uploaded as they grow ([`SeriesUpload`]), and a worker shutting
 //! down gives its job back to the queue instead of failing it.
+//!
+//! A deleted job ([`Jobs::delete`]) is gone from the store at once; a run of it stops at
+//! its next step (in this process: its cancel flag; on another worker: at its next lease
+//! renewal, which finds no job), its later writes match no row, and its worker removes the
+//! run directory when the run has stopped.
 
 use super::series::{self, SeriesFile};
 use super::store::{Claimant, ClaimedJob, JobStatus, JobStore, Renewal};
@@ -46,7 +52,7 @@ pub struct Jobs {
     pub config: Config,
     /// A job was queued (or the pool is stopping).
     wake: Notify,
-    /// Cancel flags of running jobs (and of jobs a DELETE raced with the claim).
+    /// Cancel flags of running jobs (and of jobs a cancel request raced with the claim).
     cancel_flags: Mutex<HashMap<Uuid, Arc<AtomicBool>>>,
     /// No new job is claimed once set.
     stopping: AtomicBool,
@@ -103,6 +109,48 @@ impl Jobs {
         self.cancel_flag(id).store(true, Ordering::SeqCst);
     }
 
+    /// Delete job `id`: its record, what the store holds of its run, and its run
+    /// directory on this node; `false` when there is no such job. A run of it stops at its
+    /// next step; when this process runs it, its worker removes the run directory once the
+    /// run has stopped (it may still be writing there until then).
+    pub async fn delete(&self, id: Uuid) -> Result<bool, sqlx::Error> {
+        // raised before the record goes, so that a worker of this process that claimed
+        // the job in the meantime stops too
+        self.request_cancel(id);
+        let deleted = self.store.delete(id).await;
+        let runs_here = matches!(&deleted, Ok(Some(row))
+            if row.status == JobStatus::Running
+                && row.worker.as_deref() == Some(self.claimant.worker.as_str()));
+        if !runs_here {
+            // no worker of this process holds the job, nor can claim it now
+            self.forget_cancel_flag(id);
+        }
+        let Some(_) = deleted? else {
+            return Ok(false);
+        };
+        if !runs_here {
+            remove_run_dir(&self.config.job_dir(&id)).await;
+        }
+        Ok(true)
+    }
+
+    /// After a run of job `id` stopped: `true`, with the run directory removed, when the
+    /// job was deleted meanwhile.
+    async fn removed_if_deleted(&self, id: Uuid, dir: &std::path::Path) -> bool {
+        match self.store.get(id).await {
+            Ok(None) => {
+                tracing::info!("the job was deleted: its run directory is removed");
+                remove_run_dir(dir).await;
+                true
+            }
+            Ok(Some(_)) => false,
+            Err(e) => {
+                tracing::warn!(error = %e, "cannot tell whether the job still exists");
+                false
+            }
+        }
+    }
+
     pub fn is_stopping(&self) -> bool {
         self.stopping.load(Ordering::SeqCst)
     }
@@ -120,6 +168,17 @@ impl Jobs {
     /// Make running jobs stop at their next step (recorded `failed` / `interrupted`).
     pub fn interrupt_running(&self) {
         self.interrupt.store(true, Ordering::SeqCst);
+    }
+}
+
+/// Remove a job's run directory, if there is one.
+async fn remove_run_dir(dir: &std::path::Path) {
+    match tokio::fs::remove_dir_all(dir).await {
+        Ok(()) => {}
+        Err(e) if e.kind() == std::io::ErrorKind::NotFound => {}
+        Err(e) => {
+            tracing::warn!(error = %e, dir = %dir.display(), "cannot remove the run directory")
+        }
     }
 }
 
@@ -244,9 +303,9 @@ impl Observer for JobObserver {
             || self.lease_lost.load(Ordering::Relaxed)
     }
 
-    /// A user's DELETE: `cancelled`. Otherwise the service's shutdown stopped the run:
-    /// `failed` / `interrupted`, the contract for a job the service gave up on (as after a
-    /// crash), in summary.json as in the record.
+    /// A user's cancel request (or DELETE): `cancelled`. Otherwise the service's shutdown
+    /// stopped the run: `failed` / `interrupted`, the contract for a job the service gave
+    /// up on (as after a crash), in summary.json as in the record.
     fn stop_reason(&self, step: u64, time: Real) -> (RunStatus, String) {
         if self.cancel.load(Ordering::SeqCst) {
             (
@@ -282,7 +341,11 @@ impl LeaseKeeper {
                     Ok(Renewal::Held { cancel: true }) => cancel.store(true, Ordering::SeqCst),
                     Ok(Renewal::Held { cancel: false }) => {}
                     Ok(Renewal::Lost) => {
-                        tracing::warn!("the job's lease was lost: stopping its run");
+                        if matches!(store.get(id).await, Ok(None)) {
+                            tracing::info!("the job was deleted: stopping its run");
+                        } else {
+                            tracing::warn!("the job's lease was lost: stopping its run");
+                        }
                         lost.store(true, Ordering::SeqCst);
                         return;
                     }
@@ -374,6 +437,9 @@ async fn execute(jobs: &Arc<Jobs>, job: ClaimedJob) -> Result<JobStatus, sqlx::E
         Err(join) => (Err(join), None),
     };
     if lease_lost.load(Ordering::SeqCst) {
+        if jobs.removed_if_deleted(id, &dir).await {
+            return Ok(JobStatus::Cancelled);
+        }
         tracing::warn!("the lease was lost: this attempt's outcome is discarded");
         return Ok(JobStatus::Failed);
     }
@@ -390,7 +456,7 @@ async fn execute(jobs: &Arc<Jobs>, job: ClaimedJob) -> Result<JobStatus, sqlx::E
 
     let (status, reason, summary, steps, time) = match outcome {
         Ok(Ok(Ok(summary))) => {
-            // the observer decided cancelled (a DELETE) or failed / interrupted (shutdown)
+            // the observer decided cancelled (a cancel request) or failed / interrupted (shutdown)
             let (status, reason) = match summary.status {
                 RunStatus::Succeeded => (JobStatus::Succeeded, None),
                 RunStatus::Failed => (JobStatus::Failed, summary.reason.clone()),
@@ -448,7 +514,7 @@ async fn execute(jobs: &Arc<Jobs>, job: ClaimedJob) -> Result<JobStatus, sqlx::E
             time,
         )
         .await?;
-    if !recorded {
+    if !recorded && !jobs.removed_if_deleted(id, &dir).await {
         tracing::warn!("another attempt holds the job: this outcome is discarded");
     }
     Ok(status)

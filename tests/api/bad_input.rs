@@ -19,6 +19,12 @@ async fn bad_submissions_are_refused_with_the_field_path() {
     let (status, body) = refused(&app, b"{ \"name\": \"x\", ".to_vec()).await;
     assert_eq!(status, 400, "{body}");
     assert_eq!(body["error"]["code"], "malformed_json");
+    // only an empty body submits the default case; whitespace is no JSON
+    for blank in [&b"\n"[..], b" ", b"\r\n\t"] {
+        let (status, body) = refused(&app, blank.to_vec()).await;
+        assert_eq!(status, 400, "{blank:?}: {body}");
+        assert_eq!(body["error"]["code"], "malformed_json");
+    }
 
     let mut case = tiny_case(0.005);
     case["scheme"] = json!({ "laplacian": "magic" });

@@ -61,16 +61,16 @@ async fn a_full_queue_answers_503_with_retry_after() {
     assert_eq!(status, 200);
     assert_eq!(loads["status"], "running");
 
-    // A queued job is cancelled at once, which frees its place; DELETE, the deprecated
-    // alias, does the same as POST .../cancel.
+    // A queued job is cancelled at once, which frees its place.
     let r = app
         .client
-        .delete(app.url(&format!("/v1/jobs/{queued}")))
+        .post(app.url(&format!("/v1/jobs/{queued}/cancel")))
         .send()
         .await
         .unwrap();
     assert_eq!(r.status().as_u16(), 200);
     let body: Value = r.json().await.unwrap();
+    assert_conforms("POST", "/v1/jobs/{id}/cancel", 200, &body);
     assert_eq!(body["status"], "cancelled");
     let again = app.submit(&tiny_case(0.002)).await;
 

@@ -197,7 +197,7 @@ fn submitting_links_to_every_route_of_a_job() {
     for (path, item) in OPENAPI["paths"].as_object().unwrap() {
         if path.contains("{id}") {
             for (method, operation) in item.as_object().unwrap() {
-                // a deprecated alias (DELETE, which cancels) is reachable but not advertised
+                // a deprecated operation would be reachable but not advertised
                 if METHODS.contains(&method.as_str()) && operation["deprecated"] != true {
                     with_id.insert(operation["operationId"].as_str().unwrap().to_string());
                 }

@@ -6,6 +6,7 @@ mod bad_input;
 mod burst;
 mod cancel;
 mod contract;
+mod delete;
 mod helpers;
 mod limits;
 mod page;

@@ -333,6 +333,66 @@ async fn a_cancel_on_a_node_stops_the_job_on_a_worker_process_within_a_renewal()
 }
 
 #[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn a_delete_on_a_node_stops_the_job_on_a_worker_process_which_removes_its_files() {
+    let Some(pg) = PgServer::start_or_skip("delete").await else {
+        return;
+    };
+    let url = pg.fresh_database().await;
+    let api = node(&url, "pg-delete").await;
+    let lease_s = 1.5;
+    let data = fresh_data_dir("pg-delete-worker");
+    let worker = worker_process(&url, &data, lease_s);
+    let id = api.submit(&long_case()).await;
+    api.wait_running(&id).await;
+    wait_rows(&api, &id, 1).await;
+    let dir = data.join("jobs").join(&id);
+    assert!(dir.is_dir());
+
+    let r = api
+        .client
+        .delete(api.url(&format!("/v1/jobs/{id}")))
+        .send()
+        .await
+        .unwrap();
+    assert_eq!(r.status().as_u16(), 204);
+    // the worker stops at its next renewal and removes its run directory
+    let asked = Instant::now();
+    while dir.exists() {
+        assert!(
+            asked.elapsed() < Duration::from_secs(10),
+            "{} is left",
+            dir.display()
+        );
+        tokio::time::sleep(Duration::from_millis(50)).await;
+    }
+    // it is free for the next job, and nothing of the deleted one comes back
+    let next = api.submit(&tiny_case(0.002)).await;
+    assert_eq!(api.wait_finished(&next).await["status"], "succeeded");
+    stop(worker);
+    for route in ["", "/loads", "/bodies", "/probes", "/loads.svg"] {
+        let (status, body) = api.get_json(&format!("/v1/jobs/{id}{route}")).await;
+        assert_eq!(status, 404, "GET {route}: {body}");
+    }
+    let store = JobStore::open(&url).await.unwrap();
+    assert!(store.get(id.parse().unwrap()).await.unwrap().is_none());
+    let JobStore::Postgres(pg_store) = &store else {
+        unreachable!("a Postgres URL")
+    };
+    for file in ["loads.csv", "bodies.csv", "probes.csv"] {
+        let id = id.parse().unwrap();
+        assert!(
+            pg_store.read_series(id, file).await.unwrap().is_empty(),
+            "{file}"
+        );
+    }
+    let log = std::fs::read_to_string(data.join("worker.log")).unwrap();
+    assert!(log.contains("the job was deleted"), "{log}");
+    assert!(!log.contains("ERROR") && !log.contains("WARN"), "{log}");
+    store.close().await;
+    api.stop().await;
+}
+
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
 async fn a_worker_stopped_with_sigterm_gives_its_job_back_at_once() {
     let Some(pg) = PgServer::start_or_skip("sigterm").await else {
         return;

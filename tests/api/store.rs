@@ -6,7 +6,9 @@
 
 use crate::helpers::fresh_data_dir;
 use crate::pg_server::PgServer;
-use mpsfsi::service::store::{Admission, Claimant, ClaimedJob, JobRow, JobStatus, JobStore};
+use mpsfsi::service::store::{
+    Admission, Claimant, ClaimedJob, JobRow, JobStatus, JobStore, Renewal,
+};
 use uuid::Uuid;
 
 /// Each case once per store.
@@ -50,6 +52,7 @@ store_cases!(
     list_filters_by_status_and_pages_newest_first,
     list_counts_the_matching_jobs_beyond_the_page,
     case_text_is_the_submitted_text,
+    delete_removes_the_job_and_its_rows_and_no_other_job_s,
 );
 
 async fn sqlite_store(tag: &str) -> JobStore {
@@ -397,6 +400,97 @@ async fn case_text_is_the_submitted_text(store: &JobStore) {
     assert_eq!(store.case_text(Uuid::new_v4()).await.unwrap(), None);
     assert!(store.get(Uuid::new_v4()).await.unwrap().is_none());
     store.ping().await.unwrap();
+}
+
+async fn delete_removes_the_job_and_its_rows_and_no_other_job_s(store: &JobStore) {
+    const LOADS: &[u8] = b"time,fx\n0,1\n";
+    let kept = submit(store, "kept").await;
+    let gone = submit(store, "gone").await;
+    let kept_attempt = claim(store).await.attempt();
+    let gone_attempt = claim(store).await.attempt();
+    store
+        .set_progress(gone, gone_attempt, 10, 0.01)
+        .await
+        .unwrap();
+    if let JobStore::Postgres(pg) = store {
+        for (id, attempt) in [(kept, kept_attempt), (gone, gone_attempt)] {
+            assert!(pg
+                .append_series(id, attempt, "loads.csv", 0, LOADS)
+                .await
+                .unwrap());
+            assert!(pg
+                .append_series(id, attempt, "probes.csv", 0, b"time\n")
+                .await
+                .unwrap());
+        }
+    }
+
+    let deleted = store.delete(gone).await.unwrap().expect("the job existed");
+    assert_eq!((deleted.id, deleted.status), (gone, JobStatus::Running));
+    assert!(store.get(gone).await.unwrap().is_none());
+    assert!(store.case_text(gone).await.unwrap().is_none());
+    assert!(store.delete(gone).await.unwrap().is_none(), "deleted twice");
+    assert!(store.delete(Uuid::new_v4()).await.unwrap().is_none());
+
+    // the worker still running it writes nothing and brings nothing back
+    store.set_started(gone, gone_attempt, 7).await.unwrap();
+    store
+        .set_progress(gone, gone_attempt, 20, 0.02)
+        .await
+        .unwrap();
+    assert!(!late_success(store, gone, gone_attempt).await);
+    assert!(!store.release(gone, gone_attempt).await.unwrap());
+    if let JobStore::Postgres(pg) = store {
+        assert_eq!(
+            store.renew(gone, gone_attempt, 600.0).await.unwrap(),
+            Renewal::Lost
+        );
+        assert!(!pg
+            .append_series(
+                gone,
+                gone_attempt,
+                "loads.csv",
+                LOADS.len() as u64,
+                b"1,2\n"
+            )
+            .await
+            .unwrap());
+        for file in ["loads.csv", "probes.csv"] {
+            assert!(
+                pg.read_series(gone, file).await.unwrap().is_empty(),
+                "{file}"
+            );
+        }
+        assert_eq!(pg.read_series(kept, "loads.csv").await.unwrap(), LOADS);
+        assert_eq!(pg.read_series(kept, "probes.csv").await.unwrap(), b"time\n");
+    }
+    assert!(
+        store.get(gone).await.unwrap().is_none(),
+        "nothing reappears"
+    );
+    assert!(store.claim_next(&claimant()).await.unwrap().is_none());
+
+    // the other job is untouched
+    let (rows, total) = store.list(None, 10, 0).await.unwrap();
+    assert_eq!((names(&rows), total), (vec!["kept"], 1));
+    assert_eq!(row(store, kept).await.status, JobStatus::Running);
+    assert!(late_success(store, kept, kept_attempt).await);
+
+    // a queued job and a finished one are deleted the same way
+    let queued = submit(store, "queued").await;
+    let status = |row: Option<JobRow>| row.expect("the job existed").status;
+    assert_eq!(
+        status(store.delete(queued).await.unwrap()),
+        JobStatus::Queued
+    );
+    assert_eq!(
+        status(store.delete(kept).await.unwrap()),
+        JobStatus::Succeeded
+    );
+    if let JobStore::Postgres(pg) = store {
+        assert!(pg.read_series(kept, "loads.csv").await.unwrap().is_empty());
+    }
+    assert_eq!(store.list(None, 10, 0).await.unwrap().1, 0);
 }
 
 /// SQLite only: a job found `running` when a process opens the store was orphaned by an

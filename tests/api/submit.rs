@@ -171,13 +171,13 @@ async fn submitted_case_succeeds_and_serves_the_same_files_as_run_case() {
     // A finished job cannot be cancelled.
     let r = app
         .client
-        .delete(app.url(&format!("/v1/jobs/{id}")))
+        .post(app.url(&format!("/v1/jobs/{id}/cancel")))
         .send()
         .await
         .unwrap();
     assert_eq!(r.status().as_u16(), 409);
     let body: Value = r.json().await.unwrap();
-    assert_conforms("DELETE", "/v1/jobs/{id}", 409, &body);
+    assert_conforms("POST", "/v1/jobs/{id}/cancel", 409, &body);
     app.stop().await;
 }
 

@@ -20,7 +20,8 @@
 //! claimed the job and apply only while the job is `running` under that attempt. So the
 //! first recorded end stands: a late finish (a second write, an attempt that lost its
 //! lease, a process whose orphaned job was recovered) does not overwrite a job that was
-//! cancelled, failed by recovery or already finished; it returns `false`.
+//! cancelled, failed by recovery or already finished; it returns `false`. Nor does it
+//! bring back a deleted job ([`JobStore::delete`]): its writes then match no row.
 
 mod job;
 mod postgres;
@@ -209,6 +210,22 @@ impl JobStore {
                 .rows_affected()
         });
         Ok(done == 1)
+    }
+
+    /// Remove job `id` and everything stored with it (Postgres: its uploaded run files,
+    /// by the `ON DELETE CASCADE` of `job_series`); the record as it was, `None` when
+    /// there is no such job. A worker still running it can no longer write: its writes
+    /// match no row (`finish` returns `false`, [`PgStore::append_series`] and `renew`
+    /// report the claim lost), so nothing of the job reappears.
+    pub async fn delete(&self, id: Uuid) -> Result<Option<JobRow>, sqlx::Error> {
+        let sql = format!("DELETE FROM jobs WHERE id = $1 RETURNING {COLUMNS}");
+        let raw: Option<RawJob> = either!(self, s => {
+            sqlx::query_as(&sql)
+                .bind(id.to_string())
+                .fetch_optional(&s.pool)
+                .await?
+        });
+        raw.map(RawJob::into_row).transpose()
     }
 
     /// Postgres: flag a running job for its worker, wherever it runs. SQLite: nothing

@@ -142,7 +142,7 @@ impl PgStore {
     }
 
     /// Append complete lines of a run file at `offset`; `false` when the attempt no
-    /// longer holds the job (nothing is written then).
+    /// longer holds the job or the job was deleted (nothing is written then).
     pub async fn append_series(
         &self,
         id: Uuid,
@@ -162,8 +162,13 @@ impl PgStore {
         .bind(data)
         .bind(attempt)
         .execute(&self.pool)
-        .await?;
-        Ok(done.rows_affected() == 1)
+        .await;
+        match done {
+            Ok(done) => Ok(done.rows_affected() == 1),
+            // the job was deleted between the check and the insert
+            Err(sqlx::Error::Database(e)) if e.is_foreign_key_violation() => Ok(false),
+            Err(e) => Err(e),
+        }
     }
 
     /// A run file as uploaded so far (empty when nothing is).
