@@ -142,9 +142,14 @@ impl JobStore {
     }
 
     pub async fn get(&self, id: Uuid) -> Result<Option<JobRow>, sqlx::Error> {
-        let sql = format!("SELECT {COLUMNS} FROM jobs WHERE id = $1");
+        self.one_job(&format!("SELECT {COLUMNS} FROM jobs WHERE id = $1"), id)
+            .await
+    }
+
+    /// The job row `sql` returns for `$1` = `id`, if any.
+    async fn one_job(&self, sql: &str, id: Uuid) -> Result<Option<JobRow>, sqlx::Error> {
         let raw: Option<RawJob> = either!(self, s => {
-            sqlx::query_as(&sql)
+            sqlx::query_as(sql)
                 .bind(id.to_string())
                 .fetch_optional(&s.pool)
                 .await?
@@ -218,14 +223,11 @@ impl JobStore {
     /// match no row (`finish` returns `false`, [`PgStore::append_series`] and `renew`
     /// report the claim lost), so nothing of the job reappears.
     pub async fn delete(&self, id: Uuid) -> Result<Option<JobRow>, sqlx::Error> {
-        let sql = format!("DELETE FROM jobs WHERE id = $1 RETURNING {COLUMNS}");
-        let raw: Option<RawJob> = either!(self, s => {
-            sqlx::query_as(&sql)
-                .bind(id.to_string())
-                .fetch_optional(&s.pool)
-                .await?
-        });
-        raw.map(RawJob::into_row).transpose()
+        self.one_job(
+            &format!("DELETE FROM jobs WHERE id = $1 RETURNING {COLUMNS}"),
+            id,
+        )
+        .await
     }
 
     /// Postgres: flag a running job for its worker, wherever it runs. SQLite: nothing
