@@ -7,3 +7,4 @@
 pub mod envelope;
 pub mod measure;
 pub mod reference;
+pub mod uncertainty;

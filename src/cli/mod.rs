@@ -41,6 +41,12 @@ pub enum Command {
         /// `--set scheme.laplacian=classic`, `--set bodies[0].motion.mass=12`. Repeatable.
         #[arg(long = "set", value_name = "PATH=VALUE")]
         set: Vec<String>,
+        /// Also run three coarser spacings (ratio 1.25, the coarsest as a four-member
+        /// lattice-offset ensemble) and write the 95 % half-width of every load and
+        /// probe reading: loads_uncertainty.csv, probes_uncertainty.csv and summary.json's
+        /// `uncertainty` (docs/uncertainty.md). About twice the run's time.
+        #[arg(long)]
+        uncertainty: bool,
     },
     /// Validate a case and print its particle count, estimated steps and kernel parameters.
     Check {
@@ -144,7 +150,12 @@ pub struct BenchArgs {
 /// Run one command; returns the process exit code.
 pub fn main(cli: Cli) -> i32 {
     match cli.command {
-        Command::Run { case, out, set } => run::run(&case, &out, &set),
+        Command::Run {
+            case,
+            out,
+            set,
+            uncertainty,
+        } => run::run(&case, &out, &set, uncertainty),
         Command::Check {
             case,
             set,

@@ -82,6 +82,10 @@ impl Observer for ProgressBarObserver {
         ));
     }
 
+    fn part(&mut self, index: usize, count: usize, label: &str) {
+        (self.line_printer())(&format!("part {} of {count}: {label}", index + 1));
+    }
+
     fn is_cancelled(&self) -> bool {
         self.interrupted.load(Ordering::SeqCst)
     }

@@ -8,12 +8,13 @@ use super::progress::ProgressBarObserver;
 use super::{report_case_error, EXIT_ERROR, EXIT_FAILED_RUN};
 use mpsfsi::analysis::envelope::impact_advice;
 use mpsfsi::case::{load_case_file, Limits, ValidCase};
+use mpsfsi::run::uncertainty as ladder;
 use mpsfsi::run::{run_case, RunStatus};
 use std::path::Path;
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::Arc;
 
-pub fn run(case_path: &Path, out: &Path, overrides: &[String]) -> i32 {
+pub fn run(case_path: &Path, out: &Path, overrides: &[String], uncertainty: bool) -> i32 {
     let case = match load_case_file(case_path, overrides)
         .and_then(|case| ValidCase::new(case, &Limits::default()))
     {
@@ -22,6 +23,12 @@ pub fn run(case_path: &Path, out: &Path, overrides: &[String]) -> i32 {
     };
     for advice in impact_advice(&case) {
         eprintln!("advice: {advice}");
+    }
+    let parts = uncertainty.then(|| ladder::plan(&case, ladder::RATIO, ladder::LEVELS, ladder::MEMBERS));
+    if let Some(parts) = &parts {
+        if let Err(e) = ladder::part_cases(&case, parts) {
+            return report_case_error(&e);
+        }
     }
     if let Err(e) = std::fs::create_dir_all(out) {
         eprintln!(
@@ -33,7 +40,11 @@ pub fn run(case_path: &Path, out: &Path, overrides: &[String]) -> i32 {
     let interrupted = Arc::new(AtomicBool::new(false));
     let mut observer = ProgressBarObserver::for_stderr(interrupted.clone());
     stop_on_signals(interrupted, observer.line_printer());
-    let result = run_case(&case, out, &mut observer);
+    let result = if uncertainty {
+        ladder::run_with_uncertainty(&case, out, &mut observer)
+    } else {
+        run_case(&case, out, &mut observer)
+    };
     observer.finish();
     match result {
         Ok(summary) => {
@@ -54,6 +65,9 @@ pub fn run(case_path: &Path, out: &Path, overrides: &[String]) -> i32 {
                 summary.wall_time_s,
                 out.display()
             );
+            if let Some(u) = &summary.uncertainty {
+                print_uncertainty(u);
+            }
             match summary.status {
                 RunStatus::Succeeded => {
                     println!("succeeded: {line}");
@@ -90,5 +104,35 @@ fn stop_on_signals(interrupted: Arc<AtomicBool>, say: impl Fn(&str) + Send + 'st
     };
     if let Err(e) = ctrlc::set_handler(handler) {
         eprintln!("warning: Ctrl-C will kill the run without summary.json: {e}");
+    }
+}
+
+/// The impulse and peak of every body's vertical and horizontal force with their 95 %
+/// half-widths, the ladder's cost and its notes.
+fn print_uncertainty(u: &mpsfsi::analysis::uncertainty::UncertaintySummary) {
+    for body in &u.bodies {
+        for c in body.columns.iter().filter(|c| c.column != "mz") {
+            println!(
+                "uncertainty: {} {}: impulse {:.4e} ± {:.2e} N s/m, peak {:.4e} ± {:.2e} N/m (observed orders {:.2}, {:.2})",
+                body.name,
+                c.column,
+                c.impulse.value,
+                c.impulse.half_width,
+                c.peak.value,
+                c.peak.half_width,
+                c.impulse.order,
+                c.peak.order
+            );
+        }
+    }
+    println!(
+        "uncertainty: {} levels, ratio {}, {:.1} s in all ({:.2} times the run); loads_uncertainty.csv",
+        u.levels.len(),
+        u.ratio,
+        u.wall_time_s,
+        u.cost_ratio
+    );
+    for note in u.notes.iter().chain(&u.advice) {
+        eprintln!("uncertainty: {note}");
     }
 }

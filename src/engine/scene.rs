@@ -109,6 +109,16 @@ pub fn initial_body_state(case: &Case, b: usize) -> WallState {
 }
 
 pub fn build_scene(case: &Case, params: &MpsParameters) -> Scene {
+    build_scene_placed(case, params, None)
+}
+
+/// [`build_scene`] with the lattice placed at `phase` (0..1) of the range an ensemble
+/// samples, or where [`build_scene`] puts it when None. With a moving body, the first
+/// one's axis ends (1 + phase) l0/8 from its nearest mirror line, so the phases span the
+/// distinct arrangements [l0/8, l0/4] (an axis at d and at l0/2 - d are mirror images);
+/// without one, the lattice moves (phase - 1/2) l0/2 sideways, so the first column next
+/// to a wall stays 1/4 to 3/4 of a spacing from it.
+pub fn build_scene_placed(case: &Case, params: &MpsParameters, phase: Option<Real>) -> Scene {
     let l0 = params.l0;
     // 1. candidate fluid particles, one per lattice site even where blocks overlap
     let mut seen: HashSet<(i64, i64)> = HashSet::new();
@@ -125,12 +135,18 @@ pub fn build_scene(case: &Case, params: &MpsParameters) -> Scene {
             }
         }
     }
-    // 1b. the first moving body's axis off the lattice's mirror lines
-    if let (Some(body), Some(&(first, _))) = (
-        case.bodies.iter().find(|b| crate::case::layout::moves(b)),
-        candidates.first(),
-    ) {
-        let shift = mirror_shift(body_axis(body), first.x, l0);
+    // 1b. the first moving body's axis off the lattice's mirror lines (or where an
+    // ensemble member places it)
+    let moving = case.bodies.iter().find(|b| crate::case::layout::moves(b));
+    let shift = match (moving, candidates.first(), phase) {
+        (Some(body), Some(&(first, _)), None) => mirror_shift(body_axis(body), first.x, l0),
+        (Some(body), Some(&(first, _)), Some(phase)) => {
+            mirror_offset(body_axis(body), first.x, l0) - (1.0 + phase) * 0.125 * l0
+        }
+        (None, _, Some(phase)) => (phase - 0.5) * 0.5 * l0,
+        _ => 0.0,
+    };
+    if shift != 0.0 {
         for (p, _) in &mut candidates {
             p.x += shift;
         }
@@ -218,12 +234,17 @@ fn body_axis(body: &crate::case::Body) -> Real {
     vec2(body.position).x + rotate(centroid(&poly), body.angle).x
 }
 
+/// Signed distance of `axis` from the nearest mirror line of a lattice with a column at
+/// `column`, in (-l0/4, l0/4].
+fn mirror_offset(axis: Real, column: Real, l0: Real) -> Real {
+    let half = 0.5 * l0;
+    (axis - column) - half * ((axis - column) / half).round()
+}
+
 /// The sideways shift of a lattice with a column at `column` that puts `axis` at least
 /// `MIRROR_CLEARANCE` l0 from the nearest mirror line (0 when it already is).
 fn mirror_shift(axis: Real, column: Real, l0: Real) -> Real {
-    let half = 0.5 * l0;
-    // signed distance from the nearest mirror line, in (-l0/4, l0/4]
-    let off = (axis - column) - half * ((axis - column) / half).round();
+    let off = mirror_offset(axis, column, l0);
     let clear = MIRROR_CLEARANCE * l0;
     if off.abs() >= clear {
         0.0

@@ -5,7 +5,7 @@ use super::config::Config;
 use super::params::MpsParameters;
 use super::particles::Particles;
 use super::resolution::Scales;
-use super::scene::{build_scene, Scene};
+use super::scene::{build_scene_placed, Scene};
 use super::walls::pressure_load::SurfacePressure;
 use super::walls::WallObject;
 use super::workspace::Workspace;
@@ -162,13 +162,19 @@ pub struct Simulation {
 impl Simulation {
     /// Build the initial state of a (validated) case.
     pub fn new(case: &Case) -> Self {
+        Self::placed(case, None)
+    }
+
+    /// [`Simulation::new`] with the particle lattice at `phase` of the placements a
+    /// lattice-offset ensemble samples ([`build_scene_placed`]); None places it as `new` does.
+    pub fn placed(case: &Case, phase: Option<Real>) -> Self {
         let params = MpsParameters::new(case);
         let Scene {
             particles,
             walls,
             domain_min,
             domain_max,
-        } = build_scene(case, &params);
+        } = build_scene_placed(case, &params, phase);
         let mut fastest: Real = particles
             .velocity
             .iter()

@@ -11,6 +11,8 @@ use serde::{Deserialize, Serialize};
 use std::path::Path;
 use std::time::Instant;
 
+pub mod uncertainty;
+
 /// Where a run is, reported after every step.
 #[derive(Debug, Clone, Copy, Default, Serialize)]
 pub struct Progress {
@@ -37,6 +39,8 @@ pub trait Observer {
     /// Called once the scene is built, before the first step.
     fn started(&mut self, _particles: usize, _estimated_steps: u64) {}
     fn progress(&mut self, _progress: &Progress) {}
+    /// Called before each run of a ladder (`--uncertainty`): part `index` of `count`.
+    fn part(&mut self, _index: usize, _count: usize, _label: &str) {}
     fn is_cancelled(&self) -> bool {
         false
     }
@@ -108,6 +112,10 @@ pub struct Summary {
     /// there is none.
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
     pub advice: Vec<String>,
+    /// The 95 % half-widths of the loads' impulses and peaks and the ladder behind them,
+    /// when the run was asked for its uncertainty ([`uncertainty`]).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub uncertainty: Option<crate::analysis::uncertainty::UncertaintySummary>,
 }
 
 #[derive(Debug, thiserror::Error)]
@@ -190,9 +198,20 @@ pub fn run_case(
     out_dir: &Path,
     observer: &mut dyn Observer,
 ) -> Result<Summary, RunError> {
+    run_case_placed(case, out_dir, observer, None)
+}
+
+/// [`run_case`] with the particle lattice at `phase` of a lattice-offset ensemble's
+/// placements ([`Simulation::placed`]).
+pub fn run_case_placed(
+    case: &ValidCase,
+    out_dir: &Path,
+    observer: &mut dyn Observer,
+    phase: Option<Real>,
+) -> Result<Summary, RunError> {
     let case: &Case = case;
     let started = Instant::now();
-    let mut sim = Simulation::new(case);
+    let mut sim = Simulation::placed(case, phase);
     let mut coupling = Coupling::new(case, &sim);
     let probes = crate::output::probes::points(case, &sim);
     let mut writer = RunWriter::create(
@@ -289,6 +308,7 @@ pub fn run_case(
         scheme: sim.config.scheme.clone(),
         version: env!("CARGO_PKG_VERSION").to_string(),
         advice: crate::analysis::envelope::impact_advice(case),
+        uncertainty: None,
     };
     let json = serde_json::to_string_pretty(&summary).expect("summary serialises");
     std::fs::write(out_dir.join("summary.json"), json + "\n")?;
