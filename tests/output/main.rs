@@ -7,6 +7,7 @@ mod filter;
 mod flow;
 mod plot;
 mod surface;
+mod uncertainty;
 mod vtk;
 
 /// A small hydrostatic tank (20 x 10 particles) as a case value.
