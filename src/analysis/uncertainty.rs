@@ -96,7 +96,9 @@ fn linear_fit(basis: &[Vec<Real>], phi: &[Real], w: &[Real]) -> Option<Vec<Real>
         }
     }
     let x = a.lu().solve(&b)?;
-    x.iter().all(|v| v.is_finite()).then(|| x.iter().copied().collect())
+    x.iter()
+        .all(|v| v.is_finite())
+        .then(|| x.iter().copied().collect())
 }
 
 /// The fit of `basis` (plus a constant) with `params` parameters in all (the order
@@ -111,7 +113,12 @@ fn fitted(
     let coef = linear_fit(basis, phi, w)?;
     let n = phi.len();
     let at: Vec<Real> = (0..n)
-        .map(|i| coef[0] + (0..basis.len()).map(|j| coef[j + 1] * basis[j][i]).sum::<Real>())
+        .map(|i| {
+            coef[0]
+                + (0..basis.len())
+                    .map(|j| coef[j + 1] * basis[j][i])
+                    .sum::<Real>()
+        })
         .collect();
     let dof = n.saturating_sub(params).max(1) as Real;
     let wsum: Real = w.iter().sum();
@@ -183,7 +190,9 @@ pub fn half_width(h: &[Real], phi: &[Real], random: Real) -> Estimate {
     let rel: Vec<Real> = h.iter().map(|x| x / h[0]).collect();
     let (lo, hi) = phi
         .iter()
-        .fold((Real::INFINITY, Real::NEG_INFINITY), |(a, b), &x| (a.min(x), b.max(x)));
+        .fold((Real::INFINITY, Real::NEG_INFINITY), |(a, b), &x| {
+            (a.min(x), b.max(x))
+        });
     let range = (hi - lo) / (n - 1) as Real;
     let constant = Estimate {
         value: phi[0],
@@ -199,10 +208,8 @@ pub fn half_width(h: &[Real], phi: &[Real], random: Real) -> Estimate {
     }
     let equal = vec![1.0; n];
     let inverse: Vec<Real> = rel.iter().map(|x| 1.0 / x).collect();
-    let best = |fits: Vec<(Fit, Fitted)>| {
-        fits.into_iter()
-            .min_by(|a, b| a.1.std.total_cmp(&b.1.std))
-    };
+    let best =
+        |fits: Vec<(Fit, Fitted)>| fits.into_iter().min_by(|a, b| a.1.std.total_cmp(&b.1.std));
     let observed = best(
         [&equal, &inverse]
             .iter()
@@ -233,7 +240,11 @@ pub fn half_width(h: &[Real], phi: &[Real], random: Real) -> Estimate {
     let eps = (f.at[0] - f.phi0).abs();
     let off = (phi[0] - f.at[0]).abs();
     let (u, factor) = if f.std < range {
-        let fs = if in_range { SAFETY_IN_RANGE } else { SAFETY_OUTSIDE };
+        let fs = if in_range {
+            SAFETY_IN_RANGE
+        } else {
+            SAFETY_OUTSIDE
+        };
         (fs * eps + f.std + off, fs)
     } else {
         let fs = SAFETY_OUTSIDE * f.std / range;

@@ -24,7 +24,8 @@ pub fn run(case_path: &Path, out: &Path, overrides: &[String], uncertainty: bool
     for advice in impact_advice(&case) {
         eprintln!("advice: {advice}");
     }
-    let parts = uncertainty.then(|| ladder::plan(&case, ladder::RATIO, ladder::LEVELS, ladder::MEMBERS));
+    let parts =
+        uncertainty.then(|| ladder::plan(&case, ladder::RATIO, ladder::LEVELS, ladder::MEMBERS));
     if let Some(parts) = &parts {
         if let Err(e) = ladder::part_cases(&case, parts) {
             return report_case_error(&e);

@@ -57,7 +57,9 @@ pub fn plan(case: &crate::case::Case, ratio: Real, levels: usize, members: usize
             let (lo, hi) = b
                 .polygon
                 .iter()
-                .fold((Real::INFINITY, Real::NEG_INFINITY), |(a, c), p| (a.min(p[1]), c.max(p[1])));
+                .fold((Real::INFINITY, Real::NEG_INFINITY), |(a, c), p| {
+                    (a.min(p[1]), c.max(p[1]))
+                });
             (hi, lo)
         })
         .max_by(|a, b| a.0.total_cmp(&b.0))
@@ -277,7 +279,12 @@ fn estimate(parts: &[Part], values: &[Real]) -> Estimate {
             .map(|(_, v)| *v)
             .collect();
         let (mean, _) = mean_and_std(&of_level);
-        h.push(parts.iter().find(|p| p.level == level).map_or(1.0, |p| p.spacing));
+        h.push(
+            parts
+                .iter()
+                .find(|p| p.level == level)
+                .map_or(1.0, |p| p.spacing),
+        );
         phi.push(if level == 0 { of_level[0] } else { mean });
     }
     let members: Vec<Real> = parts
@@ -334,7 +341,11 @@ fn combine_file(
                 };
                 let f = moving_average(0.0, t, &cols[c], window);
                 impulses.push(impulse(0.0, t, &cols[c]));
-                peaks.push(f.iter().copied().fold(0.0, |a: Real, x| if x.abs() > a.abs() { x } else { a }));
+                peaks.push(
+                    f.iter()
+                        .copied()
+                        .fold(0.0, |a: Real, x| if x.abs() > a.abs() { x } else { a }),
+                );
                 per_part.push(times0.iter().map(|&t0| interpolate(t, &f, t0)).collect());
             }
             per_column.push(ComponentUncertainty {
@@ -395,8 +406,24 @@ pub fn combine(
     dirs: &[PathBuf],
     window: Real,
 ) -> std::io::Result<UncertaintySummary> {
-    let bodies = combine_file(out_dir, parts, dirs, window, "loads", "body", &["fx", "fy", "mz"])?;
-    let probes = combine_file(out_dir, parts, dirs, window, "probes", "probe", &["pressure"])?;
+    let bodies = combine_file(
+        out_dir,
+        parts,
+        dirs,
+        window,
+        "loads",
+        "body",
+        &["fx", "fy", "mz"],
+    )?;
+    let probes = combine_file(
+        out_dir,
+        parts,
+        dirs,
+        window,
+        "probes",
+        "probe",
+        &["pressure"],
+    )?;
     let mut notes = Vec::new();
     for s in bodies.iter().chain(&probes) {
         for c in &s.columns {

@@ -11,4 +11,5 @@ mod impact;
 mod plate_impulse;
 mod probe;
 mod replay;
+mod uncertainty;
 mod wedge;

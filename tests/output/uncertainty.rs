@@ -19,8 +19,16 @@ fn an_exact_ladder_in_the_expected_range_gets_the_order_and_factor_1_25() {
     let e = half_width(&H, &phi, 0.0);
     assert_eq!(e.fit, Fit::ObservedOrder);
     assert!((e.order - 1.5).abs() < 1e-4, "order {}", e.order);
-    assert!((e.extrapolated - 2.0).abs() < 1e-6, "phi_0 {}", e.extrapolated);
-    assert!((e.half_width - 1.25 * 0.3).abs() < 1e-5, "U {}", e.half_width);
+    assert!(
+        (e.extrapolated - 2.0).abs() < 1e-6,
+        "phi_0 {}",
+        e.extrapolated
+    );
+    assert!(
+        (e.half_width - 1.25 * 0.3).abs() < 1e-5,
+        "U {}",
+        e.half_width
+    );
     assert!(e.well_behaved());
     // a random part adds in quadrature
     let r = half_width(&H, &phi, 0.4);
@@ -52,7 +60,11 @@ fn an_order_outside_the_range_takes_factor_3_and_still_holds_the_limit() {
 fn scatter_without_a_trend_widens_the_band_beyond_the_range() {
     let phi = [2.0, 2.01, 1.99, 2.012];
     let e = half_width(&H, &phi, 0.0);
-    assert!(e.safety_factor >= SAFETY_OUTSIDE, "factor {}", e.safety_factor);
+    assert!(
+        e.safety_factor >= SAFETY_OUTSIDE,
+        "factor {}",
+        e.safety_factor
+    );
     assert!(e.half_width >= 0.022, "U {}", e.half_width);
     // levels that agree exactly leave only the random part
     let flat = half_width(&H, &[2.0; 4], 0.05);
@@ -87,7 +99,11 @@ fn the_ladder_files_carry_the_finest_rows_and_their_half_widths() {
         .collect();
     let mut dirs = Vec::new();
     for (k, p) in parts.iter().enumerate() {
-        let dir = if k == 0 { out.clone() } else { out.join(&p.name) };
+        let dir = if k == 0 {
+            out.clone()
+        } else {
+            out.join(&p.name)
+        };
         std::fs::create_dir_all(&dir).unwrap();
         let mut text = String::from("time,body,fx,fy,mz\n");
         for i in 1..=100 {
