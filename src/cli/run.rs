@@ -24,10 +24,11 @@ pub fn run(case_path: &Path, out: &Path, overrides: &[String], uncertainty: bool
     for advice in impact_advice(&case) {
         eprintln!("advice: {advice}");
     }
-    let parts =
-        uncertainty.then(|| ladder::plan(&case, ladder::RATIO, ladder::LEVELS, ladder::MEMBERS));
-    if let Some(parts) = &parts {
-        if let Err(e) = ladder::part_cases(&case, parts) {
+    if uncertainty {
+        // every level laid out and validated before any work
+        if let Err(e) = ladder::plan(&case, ladder::RATIO, ladder::LEVELS, ladder::MEMBERS)
+            .and_then(|parts| ladder::part_cases(&case, &parts))
+        {
             return report_case_error(&e);
         }
     }

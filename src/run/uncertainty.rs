@@ -48,37 +48,49 @@ pub struct Part {
 /// whose spacing leaves part of a row starts with its surface up to a spacing low: the
 /// 30° wedge's impulse at 15.6 mm read 20 % under its neighbours, its surface 12.5 mm
 /// (2 ms of entry) down.
-pub fn plan(case: &crate::case::Case, ratio: Real, levels: usize, members: usize) -> Vec<Part> {
+pub fn plan(
+    case: &crate::case::Case,
+    ratio: Real,
+    levels: usize,
+    members: usize,
+) -> Result<Vec<Part>, CaseError> {
     let h0 = case.particle_spacing;
     let depth = case
         .fluid_blocks
         .iter()
         .map(|b| {
-            let (lo, hi) = b
-                .polygon
+            b.polygon
                 .iter()
-                .fold((Real::INFINITY, Real::NEG_INFINITY), |(a, c), p| {
-                    (a.min(p[1]), c.max(p[1]))
-                });
-            (hi, lo)
+                .fold((Real::NEG_INFINITY, Real::INFINITY), |(hi, lo), p| {
+                    (hi.max(p[1]), lo.min(p[1]))
+                })
         })
         .max_by(|a, b| a.0.total_cmp(&b.0))
-        .map(|(hi, lo)| ((hi - lo) / h0 + 1e-9).floor() * h0)
+        .map(|(hi, lo)| ((hi - lo) / h0 + 1e-9).floor())
         .unwrap_or(0.0);
     let mut parts = Vec::new();
+    let mut rows = depth;
     for level in 0..levels {
-        let nominal = h0 * ratio.powi(level as i32);
-        let h = if level == 0 || depth <= 0.0 {
-            nominal
+        let h = if level == 0 {
+            h0
         } else {
-            depth / (depth / nominal).round().max(1.0)
+            // fewer rows than the level before, however the rounding falls
+            rows = (depth / ratio.powi(level as i32)).round().min(rows - 1.0);
+            if rows < 1.0 {
+                return Err(CaseError::new(
+                    "particle_spacing",
+                    format!(
+                        "--uncertainty needs {levels} levels with fewer and fewer rows of fluid, and {depth} rows at {h0} m leave too few"
+                    ),
+                ));
+            }
+            depth * h0 / rows
+        };
+        let name = match level {
+            0 => String::new(),
+            _ => format!("level_{level}"),
         };
         if level + 1 < levels {
-            let name = if level == 0 {
-                String::new()
-            } else {
-                format!("level_{level}")
-            };
             parts.push(Part {
                 level,
                 spacing: h,
@@ -91,12 +103,12 @@ pub fn plan(case: &crate::case::Case, ratio: Real, levels: usize, members: usize
                     level,
                     spacing: h,
                     phase: Some((m as Real + 0.5) / members as Real),
-                    name: format!("level_{level}_member_{m}"),
+                    name: format!("{name}_member_{m}"),
                 });
             }
         }
     }
-    parts
+    Ok(parts)
 }
 
 /// The case of each part, validated before any work: a level the case cannot be laid
@@ -130,8 +142,11 @@ pub fn run_with_uncertainty(
     out_dir: &Path,
     observer: &mut dyn Observer,
 ) -> Result<Summary, RunError> {
-    let parts = plan(case, RATIO, LEVELS, MEMBERS);
-    let cases = part_cases(case, &parts).map_err(|e| {
+    let cases = plan(case, RATIO, LEVELS, MEMBERS).and_then(|parts| {
+        let cases = part_cases(case, &parts)?;
+        Ok((parts, cases))
+    });
+    let (parts, cases) = cases.map_err(|e| {
         RunError::Io(std::io::Error::new(
             std::io::ErrorKind::InvalidInput,
             e.to_string(),
@@ -424,19 +439,29 @@ pub fn combine(
         "probe",
         &["pressure"],
     )?;
-    let mut notes = Vec::new();
-    for s in bodies.iter().chain(&probes) {
-        for c in &s.columns {
-            for (what, e) in [("impulse", &c.impulse), ("peak", &c.peak)] {
-                if !e.well_behaved() && e.value != 0.0 {
-                    notes.push(format!(
-                        "{} {} {what}: observed order {:.2} outside [0.5, 2.1) or a fit that scatters more than the levels differ; the half-width uses the safety factor {:.2}",
-                        s.name, c.column, e.order, e.safety_factor
-                    ));
-                }
-            }
-        }
-    }
+    // one line per body or probe naming the readings outside the expected behaviour
+    let notes = bodies
+        .iter()
+        .chain(&probes)
+        .filter_map(|s| {
+            let odd: Vec<String> = s
+                .columns
+                .iter()
+                .flat_map(|c| [("impulse", &c.impulse), ("peak", &c.peak)].map(|w| (c, w)))
+                .filter(|(_, (_, e))| !e.well_behaved())
+                .map(|(c, (what, e))| {
+                    format!("{} {what} (order {:.2}, factor {:.2})", c.column, e.order, e.safety_factor)
+                })
+                .collect();
+            (!odd.is_empty()).then(|| {
+                format!(
+                    "{}: {}: observed order outside [0.5, 2.1) or a fit that scatters more than the levels differ, so the half-width carries the safety factor 3 or the scatter factor 3 U_s/Delta",
+                    s.name,
+                    odd.join(", ")
+                )
+            })
+        })
+        .collect();
     Ok(UncertaintySummary {
         ratio: RATIO,
         filter_window_s: window,

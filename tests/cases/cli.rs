@@ -600,3 +600,69 @@ fn check_advises_on_a_body_outside_the_validated_impact_envelope() {
         "{advice:?}"
     );
 }
+
+/// `--uncertainty` runs the ladder (its parts named on stderr) and writes the half-width
+/// files next to the usual run directory; a case too shallow for four levels is
+/// rejected before any work, on `particle_spacing`.
+#[test]
+fn run_with_uncertainty_writes_the_ladder_files() {
+    let dir = scratch("uncertainty");
+    let out = mpsfsi(&[
+        "run",
+        tiny().to_str().unwrap(),
+        "--out",
+        dir.to_str().unwrap(),
+        "--uncertainty",
+    ]);
+    let (stdout, stderr) = (text(&out.stdout), text(&out.stderr));
+    assert!(out.status.success(), "stdout {stdout}\nstderr {stderr}");
+    assert!(stderr.contains("part 7 of 7: level 3"), "{stderr}");
+    assert!(
+        stdout.contains("uncertainty: 4 levels, ratio 1.25"),
+        "{stdout}"
+    );
+    let loads = std::fs::read_to_string(dir.join("loads_uncertainty.csv")).unwrap();
+    assert!(
+        loads.starts_with("time,body,fx,fy,mz,u_fx,u_fy,u_mz\n"),
+        "{loads}"
+    );
+    let rows = std::fs::read_to_string(dir.join("loads.csv"))
+        .unwrap()
+        .lines()
+        .count();
+    assert_eq!(loads.lines().count(), rows, "one row per loads.csv row");
+    let probes = std::fs::read_to_string(dir.join("probes_uncertainty.csv")).unwrap();
+    assert!(
+        probes.starts_with("time,probe,pressure,u_pressure\n"),
+        "{probes}"
+    );
+    assert!(dir.join("levels/level_3_member_3/loads.csv").exists());
+    let summary: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(dir.join("summary.json")).unwrap()).unwrap();
+    let levels = summary["uncertainty"]["levels"].as_array().unwrap();
+    assert_eq!(levels.len(), 4);
+    assert_eq!(levels[3]["members"], 4);
+    let spacings: Vec<f64> = levels
+        .iter()
+        .map(|l| l["spacing"].as_f64().unwrap())
+        .collect();
+    assert!(spacings.windows(2).all(|w| w[1] > w[0]), "{spacings:?}");
+
+    let shallow = scratch("uncertainty_shallow");
+    let out = mpsfsi(&[
+        "run",
+        tiny().to_str().unwrap(),
+        "--out",
+        shallow.to_str().unwrap(),
+        "--uncertainty",
+        "--set",
+        "particle_spacing=0.02",
+    ]);
+    assert_eq!(out.status.code(), Some(2));
+    let stderr = text(&out.stderr);
+    assert!(
+        stderr.contains("particle_spacing: --uncertainty needs 4 levels"),
+        "{stderr}"
+    );
+    assert!(!shallow.join("loads.csv").exists());
+}

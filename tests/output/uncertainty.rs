@@ -153,7 +153,7 @@ fn the_ladder_keeps_the_water_depth_in_whole_rows() {
     let path = std::path::PathBuf::from(env!("CARGO_MANIFEST_DIR"))
         .join("cases/wedge_30deg_constant_velocity.json");
     let case = mpsfsi::case::load_case_file(&path, &[]).unwrap();
-    let parts = plan(&case, 1.25, 4, 4);
+    let parts = plan(&case, 1.25, 4, 4).unwrap();
     assert_eq!(parts.len(), 7);
     assert_eq!(parts[0].spacing, case.particle_spacing);
     for p in &parts {
