@@ -59,7 +59,8 @@ pub enum Command {
     },
     /// Draw a run's flow: the particles of the snapshot nearest `--time` coloured by a
     /// field, with the walls and bodies at their pose, as an SVG picture; or, with
-    /// `--surface BODY`, the pressure along that body's surface.
+    /// `--surface BODY`, the pressure along that body's surface; or, with `--loads`,
+    /// the load history (with its 95 % band after `run --uncertainty`).
     Plot {
         /// Run directory (with `snapshots/`).
         run_dir: PathBuf,
@@ -77,6 +78,11 @@ pub enum Command {
         /// (p in kPa when it does not move) against the arc length from its first vertex.
         #[arg(long, value_name = "BODY", conflicts_with_all = ["field", "window"])]
         surface: Option<String>,
+        /// Draw the load history instead: fx, fy and mz of every body and named wall
+        /// against time, each body's 95 % band shaded when the run has
+        /// loads_uncertainty.csv.
+        #[arg(long, conflicts_with_all = ["field", "window", "surface", "time"])]
+        loads: bool,
         /// SVG file to write.
         #[arg(long)]
         out: PathBuf,
@@ -167,8 +173,10 @@ pub fn main(cli: Cli) -> i32 {
             field,
             window,
             surface,
+            loads,
             out,
         } => match surface {
+            _ if loads => plot::plot_loads(&run_dir, &out),
             Some(body) => plot::plot_surface(&run_dir, time, &body, &out),
             None => plot::plot(&run_dir, time, &field, window.as_deref(), &out),
         },

@@ -1,5 +1,6 @@
 //! `mpsfsi plot RUN_DIR [--time T] [--field F] [--window X0,X1,Y0,Y1] --out FILE.svg`
 //! and `mpsfsi plot RUN_DIR --surface BODY [--time T] --out FILE.svg`
+//! and `mpsfsi plot RUN_DIR --loads --out FILE.svg`
 
 use super::{EXIT_ERROR, EXIT_REJECTED};
 use mpsfsi::output::flow::{flow_svg, parse_window, read_snapshot, title, FlowField};
@@ -107,4 +108,35 @@ pub fn plot_surface(run_dir: &Path, time: Option<f64>, body: &str, out: &Path) -
         .unwrap_or_default();
     let svg = surface_svg(&snapshot, object, &surface_title(&name, body, &snapshot));
     write_svg(svg, out, snapshot.time, &format!("the surface of {body}"))
+}
+
+/// The load history of `loads.csv`, with the band of `loads_uncertainty.csv` when the
+/// run has one.
+pub fn plot_loads(run_dir: &Path, out: &Path) -> i32 {
+    let read = |name: &str| std::fs::read_to_string(run_dir.join(name));
+    let loads = match read("loads.csv") {
+        Ok(text) => text,
+        Err(e) => {
+            eprintln!("error: {}: loads.csv: {e}", run_dir.display());
+            return EXIT_ERROR;
+        }
+    };
+    let band = read("loads_uncertainty.csv").ok();
+    let name = run_dir
+        .file_name()
+        .map(|n| n.to_string_lossy().into_owned())
+        .unwrap_or_default();
+    let title = format!(
+        "{name}: loads{}",
+        if band.is_some() { " (95 % band)" } else { "" }
+    );
+    let svg = mpsfsi::output::plot::loads_svg_with_band(&loads, band.as_deref(), &title);
+    let rows = loads.lines().count().saturating_sub(1);
+    let end = loads
+        .lines()
+        .last()
+        .and_then(|l| l.split(',').next())
+        .and_then(|t| t.parse().ok())
+        .unwrap_or(0.0);
+    write_svg(svg, out, end, &format!("{rows} rows"))
 }

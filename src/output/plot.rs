@@ -1,5 +1,6 @@
 //! SVG plots (plotters' SVG backend into a String): the load history of a run (the
-//! service's `/loads.svg`) and the benchmark's error against wall time.
+//! service's `/loads.svg`, `mpsfsi plot RUN --loads`), with its 95 % band when the run
+//! has one, and the benchmark's error against wall time.
 //!
 //! Every data series is one `<polyline>` of stroke width 2 (grid and axis lines are
 //! polylines of width 1; legend keys are rectangles), so the series can be counted.
@@ -60,6 +61,56 @@ pub(super) fn padded_range(values: impl Iterator<Item = f64>) -> (f64, f64) {
 /// time in s, one line per body in each panel. The text of a file a running job is
 /// still appending to is passed up to its last newline.
 pub fn loads_svg(csv_text: &str, title: &str) -> Result<String, PlotError> {
+    loads_svg_with_band(csv_text, None, title)
+}
+
+/// Per body, the rows of `loads_uncertainty.csv`: (time, [fx, fy, mz], [u_fx, u_fy, u_mz]).
+type Band = BTreeMap<String, Vec<(f64, [f64; 3], [f64; 3])>>;
+
+fn parse_band(text: &str) -> Result<Band, PlotError> {
+    let bad = |e: String| PlotError::Data(format!("loads_uncertainty.csv: {e}"));
+    let mut reader = csv::ReaderBuilder::new()
+        .has_headers(true)
+        .from_reader(super::series::complete_lines(text.as_bytes()));
+    let header: Vec<String> = reader
+        .headers()
+        .map_err(|e| bad(e.to_string()))?
+        .iter()
+        .map(str::to_string)
+        .collect();
+    if header != ["time", "body", "fx", "fy", "mz", "u_fx", "u_fy", "u_mz"] {
+        return Err(bad(format!("header {header:?}")));
+    }
+    let mut band = Band::new();
+    for record in reader.records() {
+        let record = record.map_err(|e| bad(e.to_string()))?;
+        let v: Vec<f64> = [0, 2, 3, 4, 5, 6, 7]
+            .iter()
+            .map(|&i| {
+                record[i]
+                    .trim()
+                    .parse::<f64>()
+                    .map_err(|e| bad(e.to_string()))
+            })
+            .collect::<Result<_, _>>()?;
+        band.entry(record[1].to_string()).or_default().push((
+            v[0],
+            [v[1], v[2], v[3]],
+            [v[4], v[5], v[6]],
+        ));
+    }
+    Ok(band)
+}
+
+/// [`loads_svg`] with, when `band_text` (the text of `loads_uncertainty.csv`) is given,
+/// each body's 95 % band drawn as a shaded area (filtered load ± half-width) under its
+/// line. The band's extent is kept in the axes.
+pub fn loads_svg_with_band(
+    csv_text: &str,
+    band_text: Option<&str>,
+    title: &str,
+) -> Result<String, PlotError> {
+    let band = band_text.map(parse_band).transpose()?.unwrap_or_default();
     let rows = parse_loads_csv(csv_text).map_err(|e| PlotError::Data(e.to_string()))?;
     // body -> (t, [fx, fy, mz]) in file order; bodies in order of first appearance
     let mut order: Vec<String> = Vec::new();
@@ -96,7 +147,11 @@ pub fn loads_svg(csv_text: &str, title: &str) -> Result<String, PlotError> {
         }
         let areas = root.split_evenly((3, 1));
         for (c, (area, (label, caption))) in areas.iter().zip(panels).enumerate() {
-            let (lo, hi) = padded_range(rows.iter().map(|r| [r.fx, r.fy, r.mz][c]));
+            let banded = band
+                .values()
+                .flatten()
+                .flat_map(|(_, v, u)| [v[c] - u[c], v[c] + u[c]]);
+            let (lo, hi) = padded_range(rows.iter().map(|r| [r.fx, r.fy, r.mz][c]).chain(banded));
             let mut chart = ChartBuilder::on(area)
                 .caption(caption, ("sans-serif", 16))
                 .margin(8)
@@ -111,6 +166,21 @@ pub fn loads_svg(csv_text: &str, title: &str) -> Result<String, PlotError> {
                 .light_line_style(WHITE.mix(0.0))
                 .draw()
                 .map_err(drawing)?;
+            for (b, name) in order.iter().enumerate() {
+                let Some(rows) = band.get(name) else { continue };
+                let outline: Vec<(f64, f64)> = rows
+                    .iter()
+                    .map(|(t, v, u)| (*t, v[c] + u[c]))
+                    .chain(rows.iter().rev().map(|(t, v, u)| (*t, v[c] - u[c])))
+                    .filter(|(t, y)| t.is_finite() && y.is_finite())
+                    .collect();
+                chart
+                    .draw_series(std::iter::once(Polygon::new(
+                        outline,
+                        colour(b).mix(0.2).filled(),
+                    )))
+                    .map_err(drawing)?;
+            }
             for (b, name) in order.iter().enumerate() {
                 let points: Vec<(f64, f64)> = series[name]
                     .iter()

@@ -647,6 +647,18 @@ fn run_with_uncertainty_writes_the_ladder_files() {
         .map(|l| l["spacing"].as_f64().unwrap())
         .collect();
     assert!(spacings.windows(2).all(|w| w[1] > w[0]), "{spacings:?}");
+    // the load plot shades the band (one area per body and panel)
+    let svg = dir.join("loads.svg");
+    let plot = mpsfsi(&[
+        "plot",
+        dir.to_str().unwrap(),
+        "--loads",
+        "--out",
+        svg.to_str().unwrap(),
+    ]);
+    assert!(plot.status.success(), "{}", text(&plot.stderr));
+    let svg = std::fs::read_to_string(svg).unwrap();
+    assert_eq!(svg.matches("<polygon").count(), 3, "the tank's band in 3 panels");
 
     let shallow = scratch("uncertainty_shallow");
     let out = mpsfsi(&[

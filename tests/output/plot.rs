@@ -1,4 +1,4 @@
-use mpsfsi::output::plot::{loads_svg, log_log_svg, Series};
+use mpsfsi::output::plot::{loads_svg, loads_svg_with_band, log_log_svg, Series};
 
 fn loads_text(bodies: &[&str], rows: usize) -> String {
     let mut s = String::from("time,body,fx,fy,mz\n");
@@ -74,6 +74,34 @@ fn loads_svg_of_a_run_that_has_not_written_a_row_is_still_a_plot() {
     assert_well_formed(&svg);
     assert_eq!(polylines(&svg).len(), 0);
     assert!(svg.contains("no load samples yet"));
+}
+
+/// With loads_uncertainty.csv, each body's band is one filled polygon per panel, drawn
+/// under the lines, and the axes reach the band's extremes (±5 kN/m here: far outside
+/// the loads themselves, so a tick beyond 1000 appears).
+#[test]
+fn loads_svg_shades_the_band_of_each_body() {
+    let loads = loads_text(&["wedge", "tank"], 60);
+    let mut band = String::from("time,body,fx,fy,mz,u_fx,u_fy,u_mz\n");
+    for line in loads.lines().skip(1) {
+        band.push_str(&format!("{line},5000,5000,5000\n"));
+    }
+    let svg = loads_svg_with_band(&loads, Some(&band), "banded").unwrap();
+    assert_well_formed(&svg);
+    assert_eq!(
+        svg.matches("<polygon").count(),
+        6,
+        "3 components x 2 bodies"
+    );
+    assert_eq!(polylines(&svg).len(), 6, "the lines are still there");
+    assert!(svg.contains("4000"), "the axes hold the band");
+    let plain = loads_svg_with_band(&loads, None, "plain").unwrap();
+    assert_eq!(plain.matches("<polygon").count(), 0);
+    let wrong = loads_svg_with_band(&loads, Some("time,body,fx\n"), "x").unwrap_err();
+    assert!(
+        wrong.to_string().contains("loads_uncertainty.csv"),
+        "{wrong}"
+    );
 }
 
 #[test]
