@@ -8,7 +8,8 @@
 //! - [`startup`]: [`App::build`] binds the listener (port 0 in tests), [`serve`] runs
 //!   until SIGTERM / Ctrl-C and shuts down gracefully.
 //! - [`routes`]: the HTTP handlers; [`error`]: the one [`ApiError`].
-//! - [`auth`]: the bearer token, required beyond loopback (all routes but the health).
+//! - [`auth`]: the bearer token, required beyond loopback (all routes but the health and
+//!   the sign-in), and the read cookie a browser gets by signing in ([`sign_in`]).
 //! - [`store`]: the job table. The table *is* the queue: a job is admitted by an insert
 //!   that checks the number of queued jobs in the same statement, and a worker claims the
 //!   oldest queued job with one `UPDATE ... RETURNING`, so a job is never lost between a
@@ -29,6 +30,7 @@ pub mod error;
 pub mod page;
 pub mod routes;
 pub mod series;
+pub mod sign_in;
 pub mod startup;
 pub mod store;
 pub mod workers;

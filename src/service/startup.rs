@@ -8,8 +8,8 @@
 //! database. Queued jobs stay queued and run after the next start. [`run_worker`] is the
 //! same without the listener: `mpsfsi worker` on a shared store.
 
-use super::auth::{self, AccessError};
-use super::config::{DatabaseUrl, Token};
+use super::auth::{self, Access, AccessError};
+use super::config::DatabaseUrl;
 use super::routes::{router, AppState};
 use super::store::JobStore;
 use super::workers::{run_worker_until_stopped, Jobs};
@@ -61,13 +61,12 @@ pub struct App {
     listener: TcpListener,
     jobs: Arc<Jobs>,
     state: AppState,
-    token: Option<Token>,
     shutdown: watch::Sender<bool>,
 }
 
 impl App {
     pub async fn build(config: Config) -> Result<App, ServeError> {
-        let token = auth::resolve_token(&config)?;
+        let access = auth::resolve_token(&config)?.map(|t| Arc::new(Access::new(t)));
         let jobs_dir = config.data_dir.join("jobs");
         std::fs::create_dir_all(&jobs_dir).map_err(|source| ServeError::DataDir {
             path: jobs_dir.display().to_string(),
@@ -93,6 +92,7 @@ impl App {
         let state = AppState {
             jobs: jobs.clone(),
             openapi: Arc::new(openapi),
+            access,
         };
         let (shutdown, _) = watch::channel(false);
         Ok(App {
@@ -100,7 +100,6 @@ impl App {
             listener,
             jobs,
             state,
-            token,
             shutdown,
         })
     }
@@ -119,7 +118,6 @@ impl App {
             listener,
             jobs,
             state,
-            token,
             shutdown,
             ..
         } = self;
@@ -133,7 +131,8 @@ impl App {
                 _ = stop.wait_for(|v| *v) => tracing::info!("shutdown requested"),
             }
         };
-        let app = auth::require_token(router(state, config.max_body_bytes), token)
+        let access = state.access.clone();
+        let app = auth::require_token(router(state, config.max_body_bytes), access)
             .layer(tower_http::trace::TraceLayer::new_for_http());
         let served = axum::serve(listener, app)
             .with_graceful_shutdown(signal)

@@ -7,6 +7,8 @@ mod burst;
 mod cancel;
 mod contract;
 mod delete;
+#[cfg(all(target_os = "linux", target_env = "gnu"))]
+mod devtools;
 mod helpers;
 mod limits;
 mod page;
@@ -14,5 +16,6 @@ mod pg_server;
 mod postgres;
 mod restart;
 mod schema;
+mod sign_in;
 mod store;
 mod submit;
