@@ -16,6 +16,7 @@
 //!   channel and the database, and a restart re-queues what was waiting.
 //! - [`workers`]: the worker pool; `run_case` runs on blocking threads, one job at a time
 //!   per worker, with cancellation and progress through the run [`crate::run::Observer`].
+//! - [`retention`]: `--keep-days`, the periodic removal of jobs that ended long ago.
 //! - [`series`]: the run directory's CSV files as JSON columns; `loads.svg` is
 //!   [`crate::output::plot::loads_svg`] of the same complete lines.
 //!
@@ -28,6 +29,7 @@ pub mod config;
 pub mod contract;
 pub mod error;
 pub mod page;
+pub mod retention;
 pub mod routes;
 pub mod series;
 pub mod sign_in;

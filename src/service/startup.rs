@@ -10,6 +10,7 @@
 
 use super::auth::{self, Access, AccessError};
 use super::config::DatabaseUrl;
+use super::retention;
 use super::routes::{router, AppState};
 use super::store::JobStore;
 use super::workers::{run_worker_until_stopped, Jobs};
@@ -123,6 +124,9 @@ impl App {
         } = self;
         let config = jobs.config.clone();
         let workers = spawn_workers(&jobs);
+        let retention = config
+            .keep()
+            .map(|keep| retention::spawn(jobs.clone(), keep));
 
         let mut stop = shutdown.subscribe();
         let signal = async move {
@@ -138,6 +142,10 @@ impl App {
             .with_graceful_shutdown(signal)
             .await;
 
+        if let Some(retention) = retention {
+            retention.abort();
+            let _ = retention.await;
+        }
         drain(&jobs, workers).await;
         served.map_err(ServeError::Serve)
     }
@@ -252,6 +260,7 @@ pub async fn serve(config: Config) -> Result<(), ServeError> {
         data = %config.data_dir.display(),
         database = %config.database_url(),
         workers = config.workers,
+        keep_days = config.keep_days,
         token = config.token.is_some() || config.token_file.is_some(),
         "mpsfsi service listening"
     );

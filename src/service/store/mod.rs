@@ -230,6 +230,20 @@ impl JobStore {
         .await
     }
 
+    /// Jobs that ended (succeeded, failed or cancelled) before `cutoff` (RFC 3339, UTC,
+    /// as the records' timestamps), oldest first. Queued and running jobs never are.
+    pub async fn finished_before(&self, cutoff: &str) -> Result<Vec<Uuid>, sqlx::Error> {
+        let sql = "SELECT id FROM jobs
+             WHERE status IN ('succeeded', 'failed', 'cancelled') AND finished_at < $1
+             ORDER BY finished_at";
+        let ids: Vec<String> = either!(self, s => {
+            sqlx::query_scalar(sql).bind(cutoff).fetch_all(&s.pool).await?
+        });
+        ids.iter()
+            .map(|id| Uuid::parse_str(id).map_err(|e| sqlx::Error::Decode(Box::new(e))))
+            .collect()
+    }
+
     /// Postgres: flag a running job for its worker, wherever it runs. SQLite: nothing
     /// (the worker is in this process: [`super::workers::Jobs::request_cancel`]).
     pub async fn request_cancel(&self, id: Uuid) -> Result<(), sqlx::Error> {
