@@ -13,7 +13,7 @@ use super::config::DatabaseUrl;
 use super::retention;
 use super::routes::{router, AppState};
 use super::store::JobStore;
-use super::workers::{run_worker_until_stopped, Jobs};
+use super::workers::{run_worker_until_stopped, spawn_queue_listener, Jobs};
 use super::Config;
 use std::sync::Arc;
 use std::time::Instant;
@@ -161,18 +161,30 @@ async fn open_store(url: &DatabaseUrl) -> Result<JobStore, ServeError> {
         })
 }
 
-/// `config.workers` worker loops (none with `--workers 0`).
-fn spawn_workers(jobs: &Arc<Jobs>) -> Vec<tokio::task::JoinHandle<()>> {
-    let workers = (0..jobs.config.workers)
+/// The worker loops of a process, and what wakes them with a shared store.
+struct Workers {
+    loops: Vec<tokio::task::JoinHandle<()>>,
+    listener: Option<tokio::task::JoinHandle<()>>,
+}
+
+/// `config.workers` worker loops (none with `--workers 0`), and with Postgres the task
+/// that wakes them when a job is queued anywhere.
+fn spawn_workers(jobs: &Arc<Jobs>) -> Workers {
+    let loops = (0..jobs.config.workers)
         .map(|_| tokio::spawn(run_worker_until_stopped(jobs.clone())))
-        .collect();
+        .collect::<Vec<_>>();
+    let listener = if loops.is_empty() {
+        None
+    } else {
+        spawn_queue_listener(jobs)
+    };
     jobs.job_queued(); // jobs re-queued from a previous process
-    workers
+    Workers { loops, listener }
 }
 
 /// Stop claiming; give running jobs the grace period; interrupt the rest at their next
 /// step (SQLite: `failed` / `interrupted`; Postgres: back to the queue); close the store.
-async fn drain(jobs: &Arc<Jobs>, workers: Vec<tokio::task::JoinHandle<()>>) {
+async fn drain(jobs: &Arc<Jobs>, workers: Workers) {
     jobs.stop_claiming();
     let deadline = Instant::now() + jobs.config.shutdown_grace();
     while jobs.running_jobs() > 0 && Instant::now() < deadline {
@@ -182,7 +194,11 @@ async fn drain(jobs: &Arc<Jobs>, workers: Vec<tokio::task::JoinHandle<()>>) {
         tracing::warn!(running = jobs.running_jobs(), "interrupting running jobs");
     }
     jobs.interrupt_running();
-    for worker in workers {
+    if let Some(listener) = workers.listener {
+        listener.abort();
+        let _ = listener.await;
+    }
+    for worker in workers.loops {
         let _ = worker.await;
     }
     jobs.store.close().await;

@@ -20,3 +20,4 @@ mod schema;
 mod sign_in;
 mod store;
 mod submit;
+mod wake;
