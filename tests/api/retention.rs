@@ -178,3 +178,37 @@ fn keep_days_must_be_a_positive_number_of_days() {
     }
     assert!(!Path::new(&data).join("jobs.db").exists());
 }
+
+/// The sweep on an injected clock: jobs that ended just now are kept at `now + 6 days`
+/// and removed, with their run directories, at `now + 8 days` (D = 7).
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn the_cutoff_is_the_sweep_s_clock_minus_d_days() {
+    use mpsfsi::service::retention::remove_expired;
+    use mpsfsi::service::workers::Jobs;
+    let data = fresh_data_dir("retention-clock");
+    let app = spawn_app_on(data.clone(), |c| c.workers = 1).await;
+    let ids = [
+        app.submit(&tiny_case(0.002)).await,
+        app.submit(&tiny_case(0.002)).await,
+    ];
+    for id in &ids {
+        assert_eq!(app.wait_finished(id).await["status"], "succeeded");
+    }
+    app.stop().await;
+    let config = mpsfsi::service::Config::for_tests(&data);
+    let store = JobStore::open(config.database_url().expose())
+        .await
+        .unwrap();
+    let jobs = Jobs::new(store, config);
+    let keep = Duration::from_secs(7 * 86_400);
+    let now = time::OffsetDateTime::now_utc();
+    let early = remove_expired(&jobs, keep, now + time::Duration::days(6)).await;
+    assert_eq!(early.unwrap(), 0);
+    let late = remove_expired(&jobs, keep, now + time::Duration::days(8)).await;
+    assert_eq!(late.unwrap(), 2);
+    for id in &ids {
+        assert!(jobs.store.get(id.parse().unwrap()).await.unwrap().is_none());
+        assert!(!data.join("jobs").join(id).exists());
+    }
+    jobs.store.close().await;
+}
