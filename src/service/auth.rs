@@ -40,7 +40,7 @@ pub const SIGN_IN_PATH: &str = "/v1/sign-in";
 /// The cookie a sign-in sets.
 pub const COOKIE_NAME: &str = "mpsfsi_read";
 
-/// How long a sign-in lasts: a working week, since the cookie only reads.
+/// How long a sign-in lasts: a week, since the cookie only reads.
 pub const SIGN_IN_LIFETIME: Duration = Duration::from_secs(7 * 24 * 3600);
 
 /// The token a server enforces and the sign-in cookies it accepts.
