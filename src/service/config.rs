@@ -49,6 +49,12 @@ pub struct Config {
     /// recorded `failed` with reason `interrupted`; queued jobs stay queued).
     #[arg(long, env = "MPSFSI_SHUTDOWN_GRACE_S", default_value_t = 10.0)]
     pub shutdown_grace_s: f64,
+    /// Remove finished jobs (succeeded, failed or cancelled) this many days after they
+    /// finished, with their run directories and stored results, as DELETE does; checked
+    /// at start-up and every hour. Unset: jobs are kept until deleted.
+    #[arg(long = "keep-days", env = "MPSFSI_KEEP_DAYS", value_name = "DAYS",
+          value_parser = positive_days)]
+    pub keep_days: Option<f64>,
     /// File holding the bearer token clients must send (`Authorization: Bearer <token>`);
     /// or put the token itself in MPSFSI_TOKEN. Required when --addr is not loopback.
     #[arg(long, env = "MPSFSI_TOKEN_FILE", value_name = "PATH")]
@@ -199,6 +205,7 @@ impl Config {
             max_particles: 500_000,
             max_body_bytes: 1 << 20,
             shutdown_grace_s: 0.0,
+            keep_days: None,
             token_file: None,
             token: None,
         }
@@ -210,6 +217,12 @@ impl Config {
         Limits {
             max_particles: self.max_particles,
         }
+    }
+
+    /// How long a finished job is kept (`--keep-days`); `None`: until deleted.
+    pub fn keep(&self) -> Option<Duration> {
+        self.keep_days
+            .map(|d| Duration::from_secs_f64(d * 86_400.0))
     }
 
     pub fn shutdown_grace(&self) -> Duration {
@@ -237,6 +250,20 @@ fn positive_seconds(s: &str) -> Result<f64, String> {
         Ok(v) if v.is_finite() && v > 0.0 => Ok(v),
         Ok(_) => Err("must be a positive number of seconds".into()),
         Err(e) => Err(e.to_string()),
+    }
+}
+
+/// Largest `--keep-days`: beyond it a cutoff would predate any job (and the seconds
+/// overflow a date).
+const MAX_KEEP_DAYS: f64 = 1.0e6;
+
+fn positive_days(s: &str) -> Result<f64, String> {
+    match s.parse::<f64>() {
+        Ok(v) if v.is_finite() && v > 0.0 && v <= MAX_KEEP_DAYS => Ok(v),
+        Ok(_) => Err(format!(
+            "must be a positive number of days, at most {MAX_KEEP_DAYS}"
+        )),
+        Err(e) => Err(format!("must be a positive number of days: {e}")),
     }
 }
 
@@ -284,6 +311,7 @@ impl From<WorkerArgs> for Config {
             addr: SocketAddr::from(([127, 0, 0, 1], 0)),
             queue_capacity: 0,
             max_body_bytes: 0,
+            keep_days: None,
             token_file: None,
             token: None,
         }

@@ -8,13 +8,15 @@
 //! - [`startup`]: [`App::build`] binds the listener (port 0 in tests), [`serve`] runs
 //!   until SIGTERM / Ctrl-C and shuts down gracefully.
 //! - [`routes`]: the HTTP handlers; [`error`]: the one [`ApiError`].
-//! - [`auth`]: the bearer token, required beyond loopback (all routes but the health).
+//! - [`auth`]: the bearer token, required beyond loopback (all routes but the health and
+//!   the sign-in), and the read cookie a browser gets by signing in ([`sign_in`]).
 //! - [`store`]: the job table. The table *is* the queue: a job is admitted by an insert
 //!   that checks the number of queued jobs in the same statement, and a worker claims the
 //!   oldest queued job with one `UPDATE ... RETURNING`, so a job is never lost between a
 //!   channel and the database, and a restart re-queues what was waiting.
 //! - [`workers`]: the worker pool; `run_case` runs on blocking threads, one job at a time
 //!   per worker, with cancellation and progress through the run [`crate::run::Observer`].
+//! - [`retention`]: `--keep-days`, the periodic removal of jobs that ended long ago.
 //! - [`series`]: the run directory's CSV files as JSON columns; `loads.svg` is
 //!   [`crate::output::plot::loads_svg`] of the same complete lines.
 //!
@@ -27,8 +29,10 @@ pub mod config;
 pub mod contract;
 pub mod error;
 pub mod page;
+pub mod retention;
 pub mod routes;
 pub mod series;
+pub mod sign_in;
 pub mod startup;
 pub mod store;
 pub mod workers;

@@ -179,3 +179,50 @@ pub fn job_page(
     let _ = writeln!(html, "<script>{SCRIPT}</script>\n</body></html>");
     html
 }
+
+/// The sign-in form ([`super::sign_in`]): the token, posted with `next`, the page to go to
+/// afterwards; `refused` when the token just posted was wrong; `token_needed` false
+/// when the server has no token (then nothing needs one).
+pub fn sign_in_form(action: &str, next: &str, token_needed: bool, refused: bool) -> String {
+    let mut html = String::new();
+    html.push_str("<!DOCTYPE html>\n<html lang=\"en\"><head><meta charset=\"utf-8\">\n");
+    let _ = writeln!(
+        html,
+        "<title>Sign in: mpsfsi</title><style>{STYLE}</style></head><body>\n<h1>Sign in</h1>"
+    );
+    if !token_needed {
+        let _ = writeln!(
+            html,
+            "<p id=\"no-token\">This server has no token: nothing needs signing in. \
+             <a href=\"{}\">Go on</a>.</p>",
+            escape(next)
+        );
+    }
+    if refused {
+        html.push_str("<p id=\"refused\"><b>That is not the token of this server.</b></p>\n");
+    }
+    let _ = writeln!(
+        html,
+        "<form method=\"post\" action=\"{}\">\
+         <label>Token <input type=\"password\" name=\"token\" autocomplete=\"current-password\" required autofocus></label>\
+         <input type=\"hidden\" name=\"next\" value=\"{}\"> <button type=\"submit\">Sign in</button></form>\n\
+         <p>The browser then keeps a cookie that lets it read pages, pictures and results; \
+         submitting, cancelling and deleting jobs still need the token in an \
+         <code>Authorization: Bearer</code> header.</p>\n</body></html>",
+        escape(action),
+        escape(next)
+    );
+    html
+}
+
+/// The 401 of a page requested without the token or a sign-in: a link to the sign-in
+/// form that comes back to `target` (a path of this service, with its query).
+pub fn sign_in_needed(sign_in: &str, target: &str) -> String {
+    format!(
+        "<!DOCTYPE html>\n<html lang=\"en\"><head><meta charset=\"utf-8\">\n\
+         <title>Sign in needed: mpsfsi</title><style>{STYLE}</style></head><body>\n\
+         <h1>Sign in needed</h1>\n<p>This server needs its token. \
+         <a id=\"sign-in\" href=\"{}\">Sign in</a> to open this page.</p>\n</body></html>\n",
+        escape(&format!("{sign_in}?next={}", query_value(target)))
+    )
+}

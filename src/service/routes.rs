@@ -1,8 +1,10 @@
 //! HTTP handlers of api/openapi.yaml. The router is built from one table ([`endpoints`]),
 //! which is also what the contract test compares with `api/openapi.yaml`.
 
+use super::auth::{Access, SIGN_IN_PATH};
 use super::error::ApiError;
 use super::series::{self, SeriesFile};
+use super::sign_in::{sign_in, sign_in_form, SignIn};
 use super::store::{Admission, JobRow, JobStatus};
 use super::workers::Jobs;
 use crate::analysis::envelope::impact_advice;
@@ -31,6 +33,14 @@ use uuid::Uuid;
 pub struct AppState {
     pub jobs: Arc<Jobs>,
     pub openapi: Arc<Value>,
+    /// The token and its sign-in cookies, when the server has a token.
+    pub access: Option<Arc<Access>>,
+}
+
+impl axum::extract::FromRef<AppState> for SignIn {
+    fn from_ref(state: &AppState) -> Self {
+        SignIn(state.access.clone())
+    }
 }
 
 /// Seconds a client refused with 503 is told to wait.
@@ -82,6 +92,12 @@ pub fn endpoints() -> Vec<(Method, &'static str, MethodRouter<AppState>)> {
             "/v1/jobs/{id}/surface.svg",
             on(MethodFilter::GET, get_surface_svg),
         ),
+        (
+            Method::GET,
+            SIGN_IN_PATH,
+            on(MethodFilter::GET, sign_in_form),
+        ),
+        (Method::POST, SIGN_IN_PATH, on(MethodFilter::POST, sign_in)),
         (Method::GET, "/v1/health", on(MethodFilter::GET, health)),
         (
             Method::GET,

@@ -8,11 +8,12 @@
 //! database. Queued jobs stay queued and run after the next start. [`run_worker`] is the
 //! same without the listener: `mpsfsi worker` on a shared store.
 
-use super::auth::{self, AccessError};
-use super::config::{DatabaseUrl, Token};
+use super::auth::{self, Access, AccessError};
+use super::config::DatabaseUrl;
+use super::retention;
 use super::routes::{router, AppState};
 use super::store::JobStore;
-use super::workers::{run_worker_until_stopped, Jobs};
+use super::workers::{run_worker_until_stopped, spawn_queue_listener, Jobs};
 use super::Config;
 use std::sync::Arc;
 use std::time::Instant;
@@ -61,13 +62,12 @@ pub struct App {
     listener: TcpListener,
     jobs: Arc<Jobs>,
     state: AppState,
-    token: Option<Token>,
     shutdown: watch::Sender<bool>,
 }
 
 impl App {
     pub async fn build(config: Config) -> Result<App, ServeError> {
-        let token = auth::resolve_token(&config)?;
+        let access = auth::resolve_token(&config)?.map(|t| Arc::new(Access::new(t)));
         let jobs_dir = config.data_dir.join("jobs");
         std::fs::create_dir_all(&jobs_dir).map_err(|source| ServeError::DataDir {
             path: jobs_dir.display().to_string(),
@@ -93,6 +93,7 @@ impl App {
         let state = AppState {
             jobs: jobs.clone(),
             openapi: Arc::new(openapi),
+            access,
         };
         let (shutdown, _) = watch::channel(false);
         Ok(App {
@@ -100,7 +101,6 @@ impl App {
             listener,
             jobs,
             state,
-            token,
             shutdown,
         })
     }
@@ -119,12 +119,14 @@ impl App {
             listener,
             jobs,
             state,
-            token,
             shutdown,
             ..
         } = self;
         let config = jobs.config.clone();
         let workers = spawn_workers(&jobs);
+        let retention = config
+            .keep()
+            .map(|keep| retention::spawn(jobs.clone(), keep));
 
         let mut stop = shutdown.subscribe();
         let signal = async move {
@@ -133,12 +135,17 @@ impl App {
                 _ = stop.wait_for(|v| *v) => tracing::info!("shutdown requested"),
             }
         };
-        let app = auth::require_token(router(state, config.max_body_bytes), token)
+        let access = state.access.clone();
+        let app = auth::require_token(router(state, config.max_body_bytes), access)
             .layer(tower_http::trace::TraceLayer::new_for_http());
         let served = axum::serve(listener, app)
             .with_graceful_shutdown(signal)
             .await;
 
+        if let Some(retention) = retention {
+            retention.abort();
+            let _ = retention.await;
+        }
         drain(&jobs, workers).await;
         served.map_err(ServeError::Serve)
     }
@@ -154,18 +161,30 @@ async fn open_store(url: &DatabaseUrl) -> Result<JobStore, ServeError> {
         })
 }
 
-/// `config.workers` worker loops (none with `--workers 0`).
-fn spawn_workers(jobs: &Arc<Jobs>) -> Vec<tokio::task::JoinHandle<()>> {
-    let workers = (0..jobs.config.workers)
+/// The worker loops of a process, and what wakes them with a shared store.
+struct Workers {
+    loops: Vec<tokio::task::JoinHandle<()>>,
+    listener: Option<tokio::task::JoinHandle<()>>,
+}
+
+/// `config.workers` worker loops (none with `--workers 0`), and with Postgres the task
+/// that wakes them when a job is queued anywhere.
+fn spawn_workers(jobs: &Arc<Jobs>) -> Workers {
+    let loops = (0..jobs.config.workers)
         .map(|_| tokio::spawn(run_worker_until_stopped(jobs.clone())))
-        .collect();
+        .collect::<Vec<_>>();
+    let listener = if loops.is_empty() {
+        None
+    } else {
+        spawn_queue_listener(jobs)
+    };
     jobs.job_queued(); // jobs re-queued from a previous process
-    workers
+    Workers { loops, listener }
 }
 
 /// Stop claiming; give running jobs the grace period; interrupt the rest at their next
 /// step (SQLite: `failed` / `interrupted`; Postgres: back to the queue); close the store.
-async fn drain(jobs: &Arc<Jobs>, workers: Vec<tokio::task::JoinHandle<()>>) {
+async fn drain(jobs: &Arc<Jobs>, workers: Workers) {
     jobs.stop_claiming();
     let deadline = Instant::now() + jobs.config.shutdown_grace();
     while jobs.running_jobs() > 0 && Instant::now() < deadline {
@@ -175,7 +194,11 @@ async fn drain(jobs: &Arc<Jobs>, workers: Vec<tokio::task::JoinHandle<()>>) {
         tracing::warn!(running = jobs.running_jobs(), "interrupting running jobs");
     }
     jobs.interrupt_running();
-    for worker in workers {
+    if let Some(listener) = workers.listener {
+        listener.abort();
+        let _ = listener.await;
+    }
+    for worker in workers.loops {
         let _ = worker.await;
     }
     jobs.store.close().await;
@@ -253,6 +276,7 @@ pub async fn serve(config: Config) -> Result<(), ServeError> {
         data = %config.data_dir.display(),
         database = %config.database_url(),
         workers = config.workers,
+        keep_days = config.keep_days,
         token = config.token.is_some() || config.token_file.is_some(),
         "mpsfsi service listening"
     );

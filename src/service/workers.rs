@@ -520,14 +520,21 @@ async fn execute(jobs: &Arc<Jobs>, job: ClaimedJob) -> Result<JobStatus, sqlx::E
     Ok(status)
 }
 
+/// Longest an idle worker waits for a wake-up before it looks at the queue itself (at
+/// most a third of the lease). Wake-ups come at once for a submission (from this
+/// process's routes, and with Postgres from any node through [`spawn_queue_listener`]),
+/// so this poll only bounds what nothing announces: a wake-up lost with the listening
+/// connection, and a dead worker's expired lease. 5 s against a 30 s default lease.
+const IDLE_POLL: Duration = Duration::from_secs(5);
+
 /// A worker: run jobs until the pool stops claiming.
 pub async fn run_worker_until_stopped(jobs: Arc<Jobs>) {
+    let idle_poll = IDLE_POLL.min(Duration::from_secs_f64(jobs.config.lease_s / 3.0));
     while !jobs.is_stopping() {
         match try_execute_job(&jobs).await {
             Ok(ExecutionOutcome::JobFinished(..)) => {}
             Ok(ExecutionOutcome::EmptyQueue) => {
-                // A missed wake-up costs at most the timeout.
-                let _ = tokio::time::timeout(Duration::from_secs(1), jobs.wake.notified()).await;
+                let _ = tokio::time::timeout(idle_poll, jobs.wake.notified()).await;
             }
             Err(e) => {
                 tracing::error!(error = %e, "worker cannot reach the job store");
@@ -535,4 +542,42 @@ pub async fn run_worker_until_stopped(jobs: Arc<Jobs>) {
             }
         }
     }
+}
+
+/// With a shared store (Postgres): wake an idle worker of this process whenever a job is
+/// announced on the queue channel (a submission on any node, a job given back), until
+/// the task is aborted. After (re)connecting, when announcements may have been missed,
+/// it wakes one too. `None` with SQLite, whose submissions wake the workers directly.
+pub fn spawn_queue_listener(jobs: &Arc<Jobs>) -> Option<tokio::task::JoinHandle<()>> {
+    let JobStore::Postgres(pg) = &jobs.store else {
+        return None;
+    };
+    let (jobs, pg) = (jobs.clone(), pg.clone());
+    Some(tokio::spawn(async move {
+        loop {
+            let mut listener = match pg.queue_listener().await {
+                Ok(listener) => listener,
+                Err(sqlx::Error::PoolClosed) => return,
+                Err(e) => {
+                    tracing::warn!(error = %e, "cannot listen for queued jobs: polling meanwhile");
+                    tokio::time::sleep(IDLE_POLL).await;
+                    continue;
+                }
+            };
+            jobs.job_queued();
+            loop {
+                match listener.try_recv().await {
+                    Ok(Some(_)) => jobs.job_queued(),
+                    // the connection was lost and is back: what was announced meanwhile is not
+                    Ok(None) => jobs.job_queued(),
+                    Err(sqlx::Error::PoolClosed) => return,
+                    Err(e) => {
+                        tracing::warn!(error = %e, "lost the queue listener: reconnecting");
+                        break;
+                    }
+                }
+            }
+            tokio::time::sleep(Duration::from_secs(1)).await;
+        }
+    }))
 }

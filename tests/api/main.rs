@@ -7,12 +7,17 @@ mod burst;
 mod cancel;
 mod contract;
 mod delete;
+#[cfg(all(target_os = "linux", target_env = "gnu"))]
+mod devtools;
 mod helpers;
 mod limits;
 mod page;
 mod pg_server;
 mod postgres;
 mod restart;
+mod retention;
 mod schema;
+mod sign_in;
 mod store;
 mod submit;
+mod wake;

@@ -389,3 +389,130 @@ fn check_screenshot(png: &[u8]) -> Result<(), String> {
         ))
     }
 }
+
+/// Behind a token (issue 48): Chromium opening a job's page without signing in gets the
+/// 401 page with the sign-in link; signed in through the form, it sees the page with its
+/// pictures, cannot read the cookie from script (HttpOnly), and a POST it makes with the
+/// cookie alone is refused with 401.
+#[cfg(all(target_os = "linux", target_env = "gnu"))]
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn behind_a_token_chromium_signs_in_and_sees_the_page() {
+    use crate::devtools::Browser;
+    const TOKEN: &str = "t0ken-page-7c2d";
+    let app = spawn_app("page-sign-in", |c| {
+        c.token = Some(mpsfsi::service::Token::new(TOKEN))
+    })
+    .await;
+    let r = app
+        .client
+        .post(app.url("/v1/jobs"))
+        .bearer_auth(TOKEN)
+        .json(&crate::helpers::tiny_case(0.002))
+        .send()
+        .await
+        .unwrap();
+    assert_eq!(r.status().as_u16(), 201);
+    let job: Value = r.json().await.unwrap();
+    let id = job["id"].as_str().unwrap().to_string();
+    let name = job["name"].as_str().unwrap().to_string();
+    let start = Instant::now();
+    loop {
+        let r = app
+            .client
+            .get(app.url(&format!("/v1/jobs/{id}")))
+            .bearer_auth(TOKEN)
+            .send()
+            .await
+            .unwrap();
+        let job: Value = r.json().await.unwrap();
+        if job["status"] == "succeeded" {
+            break;
+        }
+        assert!(start.elapsed() < Duration::from_secs(60), "{job:#}");
+        tokio::time::sleep(Duration::from_millis(50)).await;
+    }
+
+    let Some(browser) = find_chromium() else {
+        assert!(
+            std::env::var_os("CI").is_none(),
+            "CI is set and Chromium is missing: .ci/run installs Debian's chromium package"
+        );
+        eprintln!("skipping the sign-in in Chromium: no Chromium");
+        app.stop().await;
+        return;
+    };
+    let page = app.url(&format!("/v1/jobs/{id}"));
+    let scratch = fresh_data_dir("chromium-sign-in");
+
+    // not signed in: the 401 page and its link, not the job
+    let dom = run_chromium(
+        &browser,
+        &scratch.join("profile-401"),
+        &["--dump-dom"],
+        &page,
+    )
+    .await;
+    let dom = String::from_utf8_lossy(&dom);
+    let link = format!("href=\"/v1/sign-in?next=%2Fv1%2Fjobs%2F{id}\"");
+    assert!(dom.contains(&link), "no sign-in link in:\n{dom}");
+    assert!(!dom.contains(&format!("<h1>{name}</h1>")), "{dom}");
+
+    // signed in through the form: the page, its pictures drawn
+    let sign_in = app.url(&format!("/v1/sign-in?next=/v1/jobs/{id}"));
+    let profile = scratch.join("profile-sign-in");
+    let job_path = format!("/v1/jobs/{id}");
+    let seen = tokio::task::spawn_blocking(move || {
+        let mut chromium = Browser::open(&browser, &CHROMIUM_FLAGS, &profile, &sign_in, CHROMIUM_TIMEOUT);
+        chromium.wait_until("document.readyState === 'complete' && document.forms.length === 1");
+        chromium.eval(&format!(
+            "document.querySelector('input[name=token]').value = {}; \
+             document.forms[0].submit(); true",
+            serde_json::to_string(TOKEN).unwrap()
+        ));
+        chromium.wait_until(&format!(
+            "location.pathname === '{job_path}' && document.readyState === 'complete' && \
+             [...document.images].every((i) => i.dataset.rendered === 'yes' || i.dataset.rendered === 'no')"
+        ));
+        chromium.eval(
+            "(async () => ({ \
+               h1: document.querySelector('h1').textContent, \
+               status: document.getElementById('status').textContent, \
+               images: [...document.images].map((i) => i.id + ':' + i.dataset.rendered), \
+               cookie: document.cookie, \
+               post: (await fetch('/v1/jobs', { method: 'POST', body: '' })).status, \
+               cancel: (await fetch(location.pathname + '/cancel', { method: 'POST' })).status, \
+               delete: (await fetch(location.pathname, { method: 'DELETE' })).status, \
+               read: (await fetch(location.pathname)).status \
+             }))()",
+        )
+    })
+    .await
+    .unwrap();
+    assert_eq!(seen["h1"], name.as_str(), "{seen:#}");
+    assert!(
+        seen["status"].as_str().unwrap().contains("succeeded"),
+        "{seen:#}"
+    );
+    assert_eq!(
+        seen["images"],
+        serde_json::json!(["loads:yes", "flow:yes"]),
+        "{seen:#}"
+    );
+    assert_eq!(seen["cookie"], "", "script can read the cookie: {seen:#}");
+    for refused in ["post", "cancel", "delete"] {
+        assert_eq!(seen[refused], 401, "a cookie-only {refused}: {seen:#}");
+    }
+    assert_eq!(seen["read"], 200, "{seen:#}");
+    let r = app
+        .client
+        .get(app.url("/v1/jobs"))
+        .bearer_auth(TOKEN)
+        .send()
+        .await
+        .unwrap();
+    let list: Value = r.json().await.unwrap();
+    assert_eq!(list["total"], 1, "{list:#}");
+    assert_eq!(list["jobs"][0]["status"], "succeeded", "{list:#}");
+    let _ = std::fs::remove_dir_all(&scratch);
+    app.stop().await;
+}

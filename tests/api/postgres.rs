@@ -15,7 +15,7 @@ use std::process::{Child, Command, Stdio};
 use std::time::{Duration, Instant};
 
 /// An API node on `url` that runs no job.
-async fn node(url: &str, tag: &str) -> TestApp {
+pub async fn node(url: &str, tag: &str) -> TestApp {
     let url = url.to_string();
     spawn_app(tag, move |c| {
         c.database = Some(DatabaseUrl::new(url));
@@ -26,7 +26,7 @@ async fn node(url: &str, tag: &str) -> TestApp {
 }
 
 /// `mpsfsi worker` on `url`, its log in `data/worker.log`.
-fn worker_process(url: &str, data: &Path, lease_s: f64) -> Child {
+pub fn worker_process(url: &str, data: &Path, lease_s: f64) -> Child {
     worker_process_with(url, data, lease_s, &[])
 }
 
@@ -44,7 +44,7 @@ fn worker_process_with(url: &str, data: &Path, lease_s: f64, flags: &[&str]) -> 
         .expect("worker process starts")
 }
 
-fn stop(mut child: Child) {
+pub fn stop(mut child: Child) {
     let _ = child.kill();
     let _ = child.wait();
 }

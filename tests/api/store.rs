@@ -53,6 +53,7 @@ store_cases!(
     list_counts_the_matching_jobs_beyond_the_page,
     case_text_is_the_submitted_text,
     delete_removes_the_job_and_its_rows_and_no_other_job_s,
+    finished_before_lists_only_jobs_that_ended_before_the_cutoff,
 );
 
 async fn sqlite_store(tag: &str) -> JobStore {
@@ -514,4 +515,22 @@ async fn sqlite_recovery_is_not_overwritten_by_the_orphaned_run() {
     assert_eq!(kept.reason.as_deref(), Some("interrupted"));
     assert_eq!(kept.finished_at, recovered.finished_at);
     store.close().await;
+}
+
+/// What retention (`--keep-days`) removes: jobs that ended before the cutoff, oldest
+/// first; never a queued or running one.
+async fn finished_before_lists_only_jobs_that_ended_before_the_cutoff(store: &JobStore) {
+    let done = submit(store, "done").await;
+    let cancelled = submit(store, "cancelled").await;
+    let running = submit(store, "running").await;
+    submit(store, "queued").await;
+    let claimed = claim(store).await;
+    assert_eq!(claimed.row.id, done);
+    assert!(late_success(store, done, claimed.attempt()).await);
+    assert!(store.cancel_if_queued(cancelled).await.unwrap());
+    assert_eq!(claim(store).await.row.id, running);
+    let all = store.finished_before("9999-12-31T23:59:59Z").await.unwrap();
+    assert_eq!(all, vec![done, cancelled]);
+    let none = store.finished_before("2000-01-01T00:00:00Z").await.unwrap();
+    assert!(none.is_empty(), "{none:?}");
 }

@@ -16,6 +16,10 @@
 //! `FOR UPDATE SKIP LOCKED`), SQLite's recovery at startup, Postgres's submission lock,
 //! cancellation flags and uploaded run files.
 //!
+//! With Postgres a submission is announced (`NOTIFY` on [`QUEUE_CHANNEL`], sent when its
+//! insert commits) and workers listen ([`PgStore::queue_listener`]), so an idle worker
+//! claims a new job at once; with SQLite the one process wakes its own workers.
+//!
 //! A worker's writes (`set_started`, `set_progress`, `finish`) name the attempt that
 //! claimed the job and apply only while the job is `running` under that attempt. So the
 //! first recorded end stands: a late finish (a second write, an attempt that lost its
@@ -30,7 +34,7 @@ mod sqlite;
 pub use job::{
     now_rfc3339, Admission, Claimant, ClaimedJob, JobRow, JobStatus, Renewal, ATTEMPTS_EXHAUSTED,
 };
-pub use postgres::PgStore;
+pub use postgres::{PgStore, QUEUE_CHANNEL};
 pub use sqlite::SqliteStore;
 
 use job::{RawJob, COLUMNS};
@@ -126,6 +130,9 @@ impl JobStore {
             Self::Postgres(s) => {
                 let mut tx = s.lock_submissions().await?;
                 let row = insert_on!(&mut *tx);
+                if row.is_some() {
+                    PgStore::announce_queued(&mut *tx).await?;
+                }
                 tx.commit().await?;
                 row
             }
@@ -228,6 +235,20 @@ impl JobStore {
             id,
         )
         .await
+    }
+
+    /// Jobs that ended (succeeded, failed or cancelled) before `cutoff` (RFC 3339, UTC,
+    /// as the records' timestamps), oldest first. Queued and running jobs never are.
+    pub async fn finished_before(&self, cutoff: &str) -> Result<Vec<Uuid>, sqlx::Error> {
+        let sql = "SELECT id FROM jobs
+             WHERE status IN ('succeeded', 'failed', 'cancelled') AND finished_at < $1
+             ORDER BY finished_at";
+        let ids: Vec<String> = either!(self, s => {
+            sqlx::query_scalar(sql).bind(cutoff).fetch_all(&s.pool).await?
+        });
+        ids.iter()
+            .map(|id| Uuid::parse_str(id).map_err(|e| sqlx::Error::Decode(Box::new(e))))
+            .collect()
     }
 
     /// Postgres: flag a running job for its worker, wherever it runs. SQLite: nothing

@@ -10,10 +10,14 @@
 use super::job::{
     now_rfc3339, Claimant, ClaimedJob, RawClaim, Renewal, ATTEMPTS_EXHAUSTED, COLUMNS,
 };
-use sqlx::postgres::{PgPool, PgPoolOptions, Postgres};
+use sqlx::postgres::{PgListener, PgPool, PgPoolOptions, Postgres};
 use sqlx::Transaction;
 use std::time::Duration;
 use uuid::Uuid;
+
+/// The channel a submission (and a job given back to the queue) is announced on, so
+/// that idle workers claim it at once rather than at their next poll.
+pub const QUEUE_CHANNEL: &str = "mpsfsi_queue";
 
 /// The advisory lock that serialises submissions, so that the queue's capacity holds
 /// under concurrent submissions from many API nodes.
@@ -46,6 +50,28 @@ impl PgStore {
             .execute(&mut *tx)
             .await?;
         Ok(tx)
+    }
+
+    /// Announce on [`QUEUE_CHANNEL`] that a job is waiting; in a transaction, the
+    /// announcement goes out when it commits.
+    pub(super) async fn announce_queued<'c, E>(executor: E) -> Result<(), sqlx::Error>
+    where
+        E: sqlx::Executor<'c, Database = Postgres>,
+    {
+        sqlx::query("SELECT pg_notify($1, '')")
+            .bind(QUEUE_CHANNEL)
+            .execute(executor)
+            .await?;
+        Ok(())
+    }
+
+    /// A connection listening on [`QUEUE_CHANNEL`] (it holds one of the pool's
+    /// connections; a lost one is reconnected by `try_recv`, which then returns
+    /// `Ok(None)`: announcements made meanwhile are lost).
+    pub async fn queue_listener(&self) -> Result<PgListener, sqlx::Error> {
+        let mut listener = PgListener::connect_with(&self.pool).await?;
+        listener.listen(QUEUE_CHANNEL).await?;
+        Ok(listener)
     }
 
     /// End the jobs whose lease expired and that must not run again (cancel requested,
@@ -119,17 +145,24 @@ impl PgStore {
         })
     }
 
-    /// Give a job back to the queue (a worker shutting down); the claim stays counted.
+    /// Give a job back to the queue (a worker shutting down), and announce it; the
+    /// claim stays counted.
     pub async fn release(&self, id: Uuid, attempt: i64) -> Result<bool, sqlx::Error> {
+        let mut tx = self.pool.begin().await?;
         let done = sqlx::query(
             "UPDATE jobs SET status = 'queued', lease_until = NULL, step = 0, simulated_time = 0
              WHERE id = $1 AND attempts = $2 AND status = 'running'",
         )
         .bind(id.to_string())
         .bind(attempt)
-        .execute(&self.pool)
+        .execute(&mut *tx)
         .await?;
-        Ok(done.rows_affected() == 1)
+        let released = done.rows_affected() == 1;
+        if released {
+            Self::announce_queued(&mut *tx).await?;
+        }
+        tx.commit().await?;
+        Ok(released)
     }
 
     /// Flag a running job; its worker sees the flag at its next lease renewal.
