@@ -16,6 +16,7 @@ use crate::output::flow::{
 use crate::output::plot::PlotError;
 use crate::output::series::{complete_lines, csv_to_columns};
 use crate::output::surface::{surface_svg, surface_title, Objects};
+use crate::run::uncertainty as ladder;
 use axum::body::Bytes;
 use axum::extract::rejection::{BytesRejection, QueryRejection};
 use axum::extract::{DefaultBodyLimit, Path, Query, State};
@@ -76,6 +77,11 @@ pub fn endpoints() -> Vec<(Method, &'static str, MethodRouter<AppState>)> {
             Method::GET,
             "/v1/jobs/{id}/probes",
             on(MethodFilter::GET, get_probes),
+        ),
+        (
+            Method::GET,
+            "/v1/jobs/{id}/loads_uncertainty",
+            on(MethodFilter::GET, get_loads_uncertainty),
         ),
         (
             Method::GET,
@@ -155,9 +161,11 @@ pub fn job_json(row: &JobRow) -> Value {
         "attempts": row.attempts,
         "worker": row.worker,
         "run_dir": row.run_dir,
+        "uncertainty": row.uncertainty,
         "links": {
             "self": base,
             "loads": format!("{base}/loads"),
+            "loads_uncertainty": format!("{base}/loads_uncertainty"),
             "loads_svg": format!("{base}/loads.svg"),
             "snapshot_svg": format!("{base}/snapshot.svg"),
             "surface_svg": format!("{base}/surface.svg"),
@@ -192,11 +200,22 @@ async fn find_job(state: &AppState, id: &str) -> Result<JobRow, ApiError> {
         .ok_or_else(|| ApiError::JobNotFound(id.to_string()))
 }
 
+/// `POST /v1/jobs?uncertainty=true`: run the resolution ladder (`mpsfsi run --uncertainty`).
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct SubmitQuery {
+    #[serde(default)]
+    uncertainty: bool,
+}
+
 #[tracing::instrument(name = "submit job", skip_all)]
 async fn submit_job(
     State(state): State<AppState>,
+    query: Result<Query<SubmitQuery>, QueryRejection>,
     body: Result<Bytes, BytesRejection>,
 ) -> Result<Response, ApiError> {
+    let Query(SubmitQuery { uncertainty }) =
+        query.map_err(|e| ApiError::BadRequest(e.body_text()))?;
     let config = &state.jobs.config;
     let body = body.map_err(|rejection| {
         if rejection.status() == StatusCode::PAYLOAD_TOO_LARGE {
@@ -226,6 +245,14 @@ async fn submit_job(
         serde_json::from_str(&case_text).map_err(|e| ApiError::MalformedJson(e.to_string()))?;
     let case = parse_case_value(value).map_err(ApiError::InvalidCase)?;
     validate(&case, &config.limits()).map_err(ApiError::InvalidCase)?;
+    if uncertainty {
+        // every level of the ladder laid out and validated before the job is queued
+        let valid = crate::case::ValidCase::new(case.clone(), &config.limits())
+            .map_err(ApiError::InvalidCase)?;
+        ladder::plan(&case, ladder::RATIO, ladder::LEVELS, ladder::MEMBERS)
+            .and_then(|parts| ladder::part_cases(&valid, &parts))
+            .map_err(ApiError::InvalidCase)?;
+    }
     if state.jobs.is_stopping() {
         return Err(ApiError::ShuttingDown);
     }
@@ -246,6 +273,7 @@ async fn submit_job(
             &case.name,
             &case_text,
             case.time.end,
+            uncertainty,
             config.queue_capacity,
         )
         .await;
@@ -489,6 +517,15 @@ async fn get_probes(
     serve_series(state, id, headers, series::PROBES).await
 }
 
+#[tracing::instrument(name = "get loads uncertainty", skip(state, headers))]
+async fn get_loads_uncertainty(
+    State(state): State<AppState>,
+    Path(id): Path<String>,
+    headers: HeaderMap,
+) -> Result<Response, ApiError> {
+    serve_series(state, id, headers, series::LOADS_UNCERTAINTY).await
+}
+
 #[tracing::instrument(name = "get loads plot", skip(state))]
 async fn get_loads_svg(
     State(state): State<AppState>,
@@ -497,11 +534,22 @@ async fn get_loads_svg(
     let row = find_job(&state, &id).await?;
     let text = read_series(&state, &row, series::LOADS).await?;
     let text = String::from_utf8(text).map_err(ApiError::internal)?;
+    // the band once the ladder has written it
+    let band = match row.uncertainty {
+        true => Some(read_series(&state, &row, series::LOADS_UNCERTAINTY).await?),
+        false => None,
+    }
+    .map(String::from_utf8)
+    .transpose()
+    .map_err(ApiError::internal)?
+    .filter(|b| b.lines().nth(1).is_some());
     let title = format!("{} ({}): loads", row.name, row.status.as_str());
-    let svg = tokio::task::spawn_blocking(move || crate::output::plot::loads_svg(&text, &title))
-        .await
-        .map_err(ApiError::internal)?
-        .map_err(ApiError::internal)?;
+    let svg = tokio::task::spawn_blocking(move || {
+        crate::output::plot::loads_svg_with_band(&text, band.as_deref(), &title)
+    })
+    .await
+    .map_err(ApiError::internal)?
+    .map_err(ApiError::internal)?;
     Ok(([(header::CONTENT_TYPE, "image/svg+xml")], svg).into_response())
 }
 

@@ -24,3 +24,9 @@ pub const PROBES: SeriesFile = SeriesFile {
     group: "probes",
     header: crate::output::PROBES_HEADER,
 };
+/// Written when the ladder ends (`?uncertainty=true`); until then the header alone.
+pub const LOADS_UNCERTAINTY: SeriesFile = SeriesFile {
+    file: "loads_uncertainty.csv",
+    group: "bodies",
+    header: "time,body,fx,fy,mz,u_fx,u_fy,u_mz",
+};

@@ -221,10 +221,15 @@ struct SeriesUpload {
 
 impl SeriesUpload {
     fn new(dir: std::path::PathBuf) -> Self {
-        let files = [series::LOADS, series::BODIES, series::PROBES]
-            .into_iter()
-            .map(|f| (f, 0))
-            .collect();
+        let files = [
+            series::LOADS,
+            series::BODIES,
+            series::PROBES,
+            series::LOADS_UNCERTAINTY,
+        ]
+        .into_iter()
+        .map(|f| (f, 0))
+        .collect();
         Self { dir, files }
     }
 
@@ -427,7 +432,11 @@ async fn execute(jobs: &Arc<Jobs>, job: ClaimedJob) -> Result<JobStatus, sqlx::E
         let dir = run_dir;
         // this service's limits, which may differ from those the job was submitted under
         let case = ValidCase::new(parse_case_str(&job.case_json)?, &limits)?;
-        let run = run_case(&case, &dir, &mut observer);
+        let run = if job.row.uncertainty {
+            crate::run::uncertainty::run_with_uncertainty(&case, &dir, &mut observer)
+        } else {
+            run_case(&case, &dir, &mut observer)
+        };
         Ok((run, observer.upload))
     })
     .await;

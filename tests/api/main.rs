@@ -20,4 +20,5 @@ mod schema;
 mod sign_in;
 mod store;
 mod submit;
+mod uncertainty;
 mod wake;

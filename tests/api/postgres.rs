@@ -259,7 +259,7 @@ async fn a_job_whose_worker_dies_every_time_fails_with_attempts_exhausted() {
     let id = uuid::Uuid::new_v4();
     let case = serde_json::to_string(&tiny_case(0.01)).unwrap();
     store
-        .submit(id, "tiny-tank", &case, 0.01, 10)
+        .submit(id, "tiny-tank", &case, 0.01, false, 10)
         .await
         .unwrap();
     // a claimant that never renews: its lease runs out as a killed worker's would

@@ -56,7 +56,10 @@ async fn queued_and_running(url: &str) -> (String, String) {
     for name in ["running", "queued"] {
         let id = Uuid::new_v4();
         let case = format!("{{\"name\": \"{name}\"}}");
-        let admitted = store.submit(id, name, &case, 1.0, 100).await.unwrap();
+        let admitted = store
+            .submit(id, name, &case, 1.0, false, 100)
+            .await
+            .unwrap();
         assert!(matches!(admitted, Admission::Accepted(_)));
         if name == "running" {
             let claimant = Claimant {

@@ -84,7 +84,7 @@ fn case_of(name: &str) -> String {
 
 async fn try_submit(store: &JobStore, name: &str, capacity: usize) -> Option<JobRow> {
     match store
-        .submit(Uuid::new_v4(), name, &case_of(name), 0.5, capacity)
+        .submit(Uuid::new_v4(), name, &case_of(name), 0.5, false, capacity)
         .await
         .expect("submit")
     {
@@ -394,7 +394,10 @@ async fn case_text_is_the_submitted_text(store: &JobStore) {
     let text =
         "{ \"name\":  \"ke\u{00ef}l\u{2014}w\u{00e9}dge\",\n  \"b\": 1,\n  \"a\": [0.5e-3]\n}\n";
     let id = Uuid::new_v4();
-    let admitted = store.submit(id, "keel", text, 0.5, 10).await.unwrap();
+    let admitted = store
+        .submit(id, "keel", text, 0.5, false, 10)
+        .await
+        .unwrap();
     assert!(matches!(admitted, Admission::Accepted(_)));
     assert_eq!(store.case_text(id).await.unwrap().as_deref(), Some(text));
     assert_eq!(claim(store).await.case_json, text);

@@ -658,7 +658,11 @@ fn run_with_uncertainty_writes_the_ladder_files() {
     ]);
     assert!(plot.status.success(), "{}", text(&plot.stderr));
     let svg = std::fs::read_to_string(svg).unwrap();
-    assert_eq!(svg.matches("<polygon").count(), 3, "the tank's band in 3 panels");
+    assert_eq!(
+        svg.matches("<polygon").count(),
+        3,
+        "the tank's band in 3 panels"
+    );
 
     let shallow = scratch("uncertainty_shallow");
     let out = mpsfsi(&[

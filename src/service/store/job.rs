@@ -66,11 +66,13 @@ pub struct JobRow {
     /// The worker that claimed it last (`host:pid`) and its run directory on that host.
     pub worker: Option<String>,
     pub run_dir: Option<String>,
+    /// Submitted with `?uncertainty=true`: the run is the resolution ladder.
+    pub uncertainty: bool,
 }
 
 /// The columns of [`JobRow`], in the order of [`RawJob`].
 pub(super) const COLUMNS: &str = "id, name, status, created_at, started_at, finished_at, step, \
-     simulated_time, end_time, particles, reason, summary, attempts, worker, run_dir";
+     simulated_time, end_time, particles, reason, summary, attempts, worker, run_dir, uncertainty";
 
 /// A row as both databases return it (text ids and statuses); [`RawJob::into_row`]
 /// checks them.
@@ -91,6 +93,7 @@ pub(super) struct RawJob {
     attempts: i64,
     worker: Option<String>,
     run_dir: Option<String>,
+    uncertainty: bool,
 }
 
 impl RawJob {
@@ -114,6 +117,7 @@ impl RawJob {
             attempts: self.attempts,
             worker: self.worker,
             run_dir: self.run_dir,
+            uncertainty: self.uncertainty,
         })
     }
 }

@@ -100,14 +100,15 @@ impl JobStore {
         name: &str,
         case_json: &str,
         end_time: f64,
+        uncertainty: bool,
         capacity: usize,
     ) -> Result<Admission, sqlx::Error> {
         // one statement, so that concurrent submissions to a SQLite file cannot overfill
         // the queue; Postgres also runs it under its submission lock, because there two
         // statements at once count the queue without each other's insert
         let sql = format!(
-            "INSERT INTO jobs (id, name, status, case_json, created_at, end_time)
-             SELECT $1, $2, 'queued', $3, $4, $5
+            "INSERT INTO jobs (id, name, status, case_json, created_at, end_time, uncertainty)
+             SELECT $1, $2, 'queued', $3, $4, $5, $7
              WHERE (SELECT COUNT(*) FROM jobs WHERE status = 'queued') < $6
              RETURNING {COLUMNS}"
         );
@@ -121,6 +122,7 @@ impl JobStore {
                     .bind(&now)
                     .bind(end_time)
                     .bind(capacity)
+                    .bind(uncertainty)
                     .fetch_optional($executor)
                     .await?
             };

@@ -1,0 +1,87 @@
+//! `POST /v1/jobs?uncertainty=true`: the job runs the resolution ladder; its record,
+//! summary, `loads_uncertainty` and `loads.svg` carry the half-widths. A bad flag is a
+//! 400, a case the ladder cannot lay out a 422 on `particle_spacing`, before queuing.
+
+use crate::helpers::{spawn_app, tiny_case};
+use crate::schema::assert_conforms;
+use serde_json::Value;
+
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn a_job_with_uncertainty_serves_the_half_widths() {
+    let app = spawn_app("uncertainty", |_| {}).await;
+    let client = reqwest::Client::new();
+    let post = |query: &'static str, case: Value| {
+        let client = client.clone();
+        let url = app.url(&format!("/v1/jobs{query}"));
+        async move {
+            client
+                .post(url)
+                .header("content-type", "application/json")
+                .body(serde_json::to_vec(&case).unwrap())
+                .send()
+                .await
+                .unwrap()
+        }
+    };
+
+    let bad = post("?uncertainty=maybe", tiny_case(0.005)).await;
+    assert_eq!(bad.status().as_u16(), 400);
+    let mut shallow = tiny_case(0.005);
+    shallow["particle_spacing"] = serde_json::json!(0.05);
+    let refused = post("?uncertainty=true", shallow).await;
+    assert_eq!(refused.status().as_u16(), 422);
+    let body: Value = refused.json().await.unwrap();
+    assert_eq!(body["error"]["path"], "particle_spacing", "{body}");
+
+    let created = post("?uncertainty=true", tiny_case(0.005)).await;
+    assert_eq!(created.status().as_u16(), 201);
+    let created: Value = created.json().await.unwrap();
+    assert_conforms("POST", "/v1/jobs", 201, &created);
+    assert_eq!(created["uncertainty"], true);
+    let id = created["id"].as_str().unwrap().to_string();
+    let job = app.wait_finished(&id).await;
+    assert_eq!(job["status"], "succeeded", "{job:#}");
+    assert_conforms("GET", "/v1/jobs/{id}", 200, &job);
+    let levels = job["summary"]["uncertainty"]["levels"].as_array().unwrap();
+    assert_eq!(levels.len(), 4, "{job:#}");
+
+    let (status, content_type, csv) = app
+        .get_csv(&format!("/v1/jobs/{id}/loads_uncertainty"))
+        .await;
+    assert_eq!(status, 200);
+    assert!(content_type.starts_with("text/csv"), "{content_type}");
+    assert!(
+        csv.starts_with("time,body,fx,fy,mz,u_fx,u_fy,u_mz\n"),
+        "{csv}"
+    );
+    let (_, _, loads) = app.get_csv(&format!("/v1/jobs/{id}/loads")).await;
+    assert_eq!(
+        csv.lines().count(),
+        loads.lines().count(),
+        "one row per load row"
+    );
+    let (status, json) = app
+        .get_json(&format!("/v1/jobs/{id}/loads_uncertainty"))
+        .await;
+    assert_eq!(status, 200);
+    assert_conforms("GET", "/v1/jobs/{id}/loads_uncertainty", 200, &json);
+    assert!(json["bodies"]["tank"]["u_fy"].is_array(), "{json}");
+    let svg = app.get_svg(&format!("/v1/jobs/{id}/loads.svg")).await;
+    assert_eq!(
+        svg.matches("<polygon").count(),
+        3,
+        "the tank's band in three panels"
+    );
+
+    // a job without the option: no band, and the route serves the header alone
+    let plain = app.submit(&tiny_case(0.002)).await;
+    let job = app.wait_finished(&plain).await;
+    assert_eq!(job["uncertainty"], false);
+    let (_, _, csv) = app
+        .get_csv(&format!("/v1/jobs/{plain}/loads_uncertainty"))
+        .await;
+    assert_eq!(csv, "time,body,fx,fy,mz,u_fx,u_fy,u_mz\n");
+    let svg = app.get_svg(&format!("/v1/jobs/{plain}/loads.svg")).await;
+    assert_eq!(svg.matches("<polygon").count(), 0);
+    app.stop().await;
+}
