@@ -28,6 +28,7 @@ pub mod auth;
 pub mod config;
 pub mod contract;
 pub mod error;
+pub mod job_json;
 pub mod page;
 pub mod retention;
 pub mod routes;

@@ -3,6 +3,7 @@
 
 use super::auth::{Access, SIGN_IN_PATH};
 use super::error::ApiError;
+use super::job_json::job_json;
 use super::series::{self, SeriesFile};
 use super::sign_in::{sign_in, sign_in_form, SignIn};
 use super::store::{Admission, JobRow, JobStatus};
@@ -128,52 +129,6 @@ pub fn router(state: AppState, max_body_bytes: usize) -> Router {
         .method_not_allowed_fallback(|| async { ApiError::MethodNotAllowed })
         .layer(DefaultBodyLimit::max(max_body_bytes))
         .with_state(state)
-}
-
-/// The JSON form of a job record.
-pub fn job_json(row: &JobRow) -> Value {
-    let fraction = match row.status {
-        JobStatus::Succeeded => 1.0,
-        _ if row.end_time > 0.0 => (row.simulated_time / row.end_time).clamp(0.0, 1.0),
-        _ => 0.0,
-    };
-    let summary = row
-        .summary
-        .as_deref()
-        .and_then(|s| serde_json::from_str::<Value>(s).ok());
-    let base = format!("/v1/jobs/{}", row.id);
-    json!({
-        "id": row.id.to_string(),
-        "name": row.name,
-        "status": row.status.as_str(),
-        "created_at": row.created_at,
-        "started_at": row.started_at,
-        "finished_at": row.finished_at,
-        "progress": {
-            "step": row.step,
-            "simulated_time": row.simulated_time,
-            "end_time": row.end_time,
-            "fraction": fraction,
-        },
-        "particles": row.particles,
-        "reason": row.reason,
-        "summary": summary,
-        "attempts": row.attempts,
-        "worker": row.worker,
-        "run_dir": row.run_dir,
-        "uncertainty": row.uncertainty,
-        "links": {
-            "self": base,
-            "loads": format!("{base}/loads"),
-            "loads_uncertainty": format!("{base}/loads_uncertainty"),
-            "loads_svg": format!("{base}/loads.svg"),
-            "snapshot_svg": format!("{base}/snapshot.svg"),
-            "surface_svg": format!("{base}/surface.svg"),
-            "bodies": format!("{base}/bodies"),
-            "probes": format!("{base}/probes"),
-            "cancel": format!("{base}/cancel"),
-        },
-    })
 }
 
 /// Where a job's run directory is readable from this node: the directory its worker
