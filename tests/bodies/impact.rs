@@ -20,7 +20,7 @@ const BREADTH: f64 = 0.5;
 const SPEED: f64 = 6.15;
 
 /// A wedge of `deadrise` degrees entering at 6.15 m/s, as a user would write it.
-fn user_wedge(deadrise: f64, spacing: f64, end: f64) -> String {
+pub fn user_wedge(deadrise: f64, spacing: f64, end: f64) -> String {
     let half = 0.5 * BREADTH;
     let height = half * deadrise.to_radians().tan();
     // the tank: 8B wide (half-width 4B), 2.4B deep
@@ -70,7 +70,7 @@ fn run_parsed_case(case: Case, body: &str) -> (Vec<(f64, f64)>, Vec<Vec<f64>>, S
 }
 
 /// Wagner's chine-wetting time B tan β / (π V).
-fn chine_time(deadrise: f64) -> f64 {
+pub fn chine_time(deadrise: f64) -> f64 {
     BREADTH * deadrise.to_radians().tan() / (std::f64::consts::PI * SPEED)
 }
 
