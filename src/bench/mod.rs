@@ -12,7 +12,9 @@
 //! - [`features`] (`--features`): what each optional feature adds to a step
 //!   (`features.csv`, `features.md`);
 //! - [`operators`] (`--operators`): the operator convergence study of Imoto (2022) §5
-//!   (`operators.md`).
+//!   (`operators.md`);
+//! - [`uncertainty`] (`--uncertainty`): the band of `run --uncertainty` beside the
+//!   measured error of each case (`uncertainty.csv`, `uncertainty.md`).
 //!
 //! Shared by the studies: the scenes they start from ([`cases`]), seeded lattice
 //! disorder ([`perturb`]), statistics ([`stats`]), the process's memory and CPU time
@@ -31,6 +33,7 @@ pub mod score;
 pub mod stats;
 pub mod stress;
 pub mod table;
+pub mod uncertainty;
 pub mod unwind;
 
 use error_study::{bench_cases, run_one, variants};
@@ -52,6 +55,9 @@ pub struct BenchOptions {
     pub scaling: bool,
     /// The feature-cost study of [`features`] (`features.csv`, `features.md`).
     pub features: bool,
+    /// The band of `--uncertainty` beside the measured error, per case ([`uncertainty`]:
+    /// `uncertainty.csv`, `uncertainty.md`).
+    pub uncertainty: bool,
     /// Skip the run-time-against-error study (it is skipped anyway with `scaling` or
     /// `features`).
     pub no_study: bool,
@@ -73,6 +79,7 @@ impl BenchOptions {
             stress: false,
             scaling: false,
             features: false,
+            uncertainty: false,
             no_study: false,
             cases: Vec::new(),
             variants: Vec::new(),
@@ -157,6 +164,9 @@ pub fn run(options: BenchOptions) -> io::Result<()> {
             options.out_dir.join("stress.md"),
             stress::stress_markdown(&stress_rows, &cfl, options.quick),
         )?;
+    }
+    if options.uncertainty {
+        uncertainty::run_all(&cases, &runs_dir.join("uncertainty"), &options.out_dir)?;
     }
     let total = started.elapsed().as_secs_f64();
     if options.runs_study() {

@@ -46,6 +46,7 @@ pub fn bench(args: super::BenchArgs) -> i32 {
         stress: args.stress,
         scaling: args.scaling,
         features: args.features,
+        uncertainty: args.uncertainty,
         no_study: args.no_study,
         cases: args.cases,
         variants: args.variants,

@@ -124,6 +124,10 @@ pub struct BenchArgs {
     /// snapshots, repeated (`features.csv`, `features.md`). Skips the run-time-against-error study.
     #[arg(long)]
     pub features: bool,
+    /// Also run each case's ladder (`run --uncertainty`, default scheme, the finest study
+    /// spacing) and report the band beside the measured error (`uncertainty.md`).
+    #[arg(long)]
+    pub uncertainty: bool,
     /// Skip the run-time-against-error study (e.g. `--stress --no-study`).
     #[arg(long)]
     pub no_study: bool,

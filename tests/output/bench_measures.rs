@@ -763,3 +763,25 @@ fn a_very_heavy_body_falls_freely_in_the_logvinovich_model() {
         assert!((v - (6.15 + 9.81 * t)).abs() < 1e-4, "t {t}: {v}");
     }
 }
+
+/// `bench --uncertainty` on the still tank: the study's error (the wall's load against
+/// the water's weight, exact in the limit) lies within the band of the ladder, and the
+/// band is tight (under 1 % of the load: still water has no discretisation trend).
+#[test]
+fn the_benchmark_reports_the_band_beside_the_error() {
+    let out = crate::scratch_dir("bench_uncertainty");
+    let mut options = mpsfsi::bench::BenchOptions::study(true, out.clone());
+    options.no_study = true;
+    options.uncertainty = true;
+    options.cases = vec!["hydrostatic".into()];
+    mpsfsi::bench::run(options).unwrap();
+    let csv = std::fs::read_to_string(out.join("uncertainty.csv")).unwrap();
+    let row: Vec<&str> = csv.lines().nth(1).unwrap().split(',').collect();
+    assert_eq!(row[0], "hydrostatic", "{csv}");
+    let (error, band): (f64, f64) = (row[3].parse().unwrap(), row[5].parse().unwrap());
+    assert!(error.abs() <= band, "{csv}");
+    assert!(band < 0.01, "{csv}");
+    assert!(std::fs::read_to_string(out.join("uncertainty.md"))
+        .unwrap()
+        .contains("| hydrostatic |"));
+}
