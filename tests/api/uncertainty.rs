@@ -85,3 +85,54 @@ async fn a_job_with_uncertainty_serves_the_half_widths() {
     assert_eq!(svg.matches("<polygon").count(), 0);
     app.stop().await;
 }
+
+/// With Postgres, a remote worker runs the ladder; the node that took the submission
+/// (which shares no directory with the worker) serves the half-widths, uploaded like the
+/// loads, and shades the band.
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn a_remote_worker_s_half_widths_are_served_by_the_node() {
+    use crate::helpers::fresh_data_dir;
+    use crate::pg_server::PgServer;
+    use crate::postgres::{node, stop, worker_process};
+    let Some(pg) = PgServer::start_or_skip("uncertainty").await else {
+        return;
+    };
+    let url = pg.fresh_database().await;
+    let api = node(&url, "pg-uncertainty").await;
+    let worker = worker_process(&url, &fresh_data_dir("pg-uncertainty-worker"), 3.0);
+    let response = reqwest::Client::new()
+        .post(api.url("/v1/jobs?uncertainty=true"))
+        .header("content-type", "application/json")
+        .body(serde_json::to_vec(&tiny_case(0.005)).unwrap())
+        .send()
+        .await
+        .unwrap();
+    assert_eq!(response.status().as_u16(), 201);
+    let id = response.json::<Value>().await.unwrap()["id"]
+        .as_str()
+        .unwrap()
+        .to_string();
+    let job = api.wait_finished(&id).await;
+    stop(worker);
+    assert_eq!(job["status"], "succeeded", "{job:#}");
+    assert_eq!(job["uncertainty"], true);
+    assert_eq!(
+        job["summary"]["uncertainty"]["levels"]
+            .as_array()
+            .unwrap()
+            .len(),
+        4
+    );
+    let (_, _, csv) = api
+        .get_csv(&format!("/v1/jobs/{id}/loads_uncertainty"))
+        .await;
+    let (_, _, loads) = api.get_csv(&format!("/v1/jobs/{id}/loads")).await;
+    assert!(
+        csv.starts_with("time,body,fx,fy,mz,u_fx,u_fy,u_mz\n"),
+        "{csv}"
+    );
+    assert_eq!(csv.lines().count(), loads.lines().count());
+    let svg = api.get_svg(&format!("/v1/jobs/{id}/loads.svg")).await;
+    assert_eq!(svg.matches("<polygon").count(), 3);
+    api.stop().await;
+}
