@@ -310,7 +310,12 @@ pub fn run_case_placed(
         advice: crate::analysis::envelope::impact_advice(case),
         uncertainty: None,
     };
-    let json = serde_json::to_string_pretty(&summary).expect("summary serialises");
-    std::fs::write(out_dir.join("summary.json"), json + "\n")?;
+    write_summary(out_dir, &summary)?;
     Ok(summary)
+}
+
+/// Write `summary.json` into the run directory.
+fn write_summary(out_dir: &Path, summary: &Summary) -> std::io::Result<()> {
+    let json = serde_json::to_string_pretty(summary).expect("summary serialises");
+    std::fs::write(out_dir.join("summary.json"), json + "\n")
 }

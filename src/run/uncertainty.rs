@@ -6,7 +6,7 @@
 //! `levels/<part>/` for every coarser part, `loads_uncertainty.csv`,
 //! `probes_uncertainty.csv` (when there are probes) and `summary.json`'s `uncertainty`.
 
-use super::{run_case_placed, Observer, RunError, RunStatus, Summary};
+use super::{run_case_placed, write_summary, Observer, RunError, RunStatus, Summary};
 use crate::analysis::uncertainty::{
     half_width, mean_and_std, student_t95, ComponentUncertainty, Estimate, LevelSummary,
     SeriesUncertainty, UncertaintySummary,
@@ -210,11 +210,6 @@ fn describe(p: &Part) -> String {
             p.level, p.spacing
         ),
     }
-}
-
-fn write_summary(out_dir: &Path, summary: &Summary) -> std::io::Result<()> {
-    let json = serde_json::to_string_pretty(summary).expect("summary serialises");
-    std::fs::write(out_dir.join("summary.json"), json + "\n")
 }
 
 fn level_summaries(parts: &[Part], summaries: &[Summary]) -> Vec<LevelSummary> {
