@@ -682,3 +682,40 @@ fn run_with_uncertainty_writes_the_ladder_files() {
     );
     assert!(!shallow.join("loads.csv").exists());
 }
+
+/// A ladder stopped in its second part keeps the user's complete run: summary.json says
+/// `cancelled`, names the part, and loads.csv has every row of the user's level.
+#[test]
+fn a_ladder_stopped_in_a_coarser_level_keeps_the_user_s_run() {
+    use mpsfsi::case::{Limits, ValidCase};
+    use mpsfsi::run::{Observer, RunStatus};
+    struct StopInPart(usize);
+    impl Observer for StopInPart {
+        fn part(&mut self, index: usize, _count: usize, _label: &str) {
+            self.0 = index;
+        }
+        fn is_cancelled(&self) -> bool {
+            self.0 >= 1
+        }
+    }
+    let dir = scratch("uncertainty_stopped");
+    let case = ValidCase::new(load_case_file(&tiny(), &[]).unwrap(), &Limits::default()).unwrap();
+    let summary =
+        mpsfsi::run::uncertainty::run_with_uncertainty(&case, &dir, &mut StopInPart(0)).unwrap();
+    assert_eq!(summary.status, RunStatus::Cancelled);
+    let reason = summary.reason.unwrap();
+    assert!(
+        reason.contains("part 2 of 7") && reason.contains("the user's level completed"),
+        "{reason}"
+    );
+    let written: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(dir.join("summary.json")).unwrap()).unwrap();
+    assert_eq!(written["status"], "cancelled");
+    assert!((written["simulated_time"].as_f64().unwrap() - 0.01).abs() < 1e-12);
+    let rows = std::fs::read_to_string(dir.join("loads.csv"))
+        .unwrap()
+        .lines()
+        .count();
+    assert_eq!(rows, 1 + 5, "0.01 s at 2 ms, one wall");
+    assert!(!dir.join("loads_uncertainty.csv").exists());
+}
