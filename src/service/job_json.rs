@@ -5,9 +5,13 @@ use serde_json::{json, Value};
 
 /// The JSON form of a job record.
 pub fn job_json(row: &JobRow) -> Value {
+    // a ladder's parts count equally: part k at fraction f of its end time is (k + f) / parts
+    let parts = row.parts.max(1) as f64;
     let fraction = match row.status {
         JobStatus::Succeeded => 1.0,
-        _ if row.end_time > 0.0 => (row.simulated_time / row.end_time).clamp(0.0, 1.0),
+        _ if row.end_time > 0.0 => {
+            (row.part as f64 + (row.simulated_time / row.end_time).clamp(0.0, 1.0)) / parts
+        }
         _ => 0.0,
     };
     let summary = row
@@ -26,7 +30,9 @@ pub fn job_json(row: &JobRow) -> Value {
             "step": row.step,
             "simulated_time": row.simulated_time,
             "end_time": row.end_time,
-            "fraction": fraction,
+            "fraction": fraction.clamp(0.0, 1.0),
+            "part": row.part,
+            "parts": row.parts,
         },
         "particles": row.particles,
         "reason": row.reason,

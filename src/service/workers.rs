@@ -206,6 +206,8 @@ struct JobObserver {
     /// With a shared store: the run's CSV files still to upload.
     upload: Option<SeriesUpload>,
     last_upload: Instant,
+    /// The ladder's part running and the parts in all ((0, 1) without a ladder).
+    part: (u64, u64),
 }
 
 const PROGRESS_EVERY: Duration = Duration::from_millis(250);
@@ -283,6 +285,7 @@ impl Observer for JobObserver {
                 self.attempt,
                 p.step,
                 p.simulated_time,
+                self.part,
             )) {
                 tracing::warn!(error = %e, "cannot record progress");
             }
@@ -300,6 +303,15 @@ impl Observer for JobObserver {
                 }
             }
         }
+    }
+
+    /// The next progress write records the new part (its first step, at once).
+    fn part(&mut self, index: usize, count: usize, label: &str) {
+        tracing::info!(part = index, parts = count, label, "ladder part");
+        self.part = (index as u64, count as u64);
+        self.last_write = Instant::now()
+            .checked_sub(PROGRESS_EVERY)
+            .unwrap_or_else(Instant::now);
     }
 
     fn is_cancelled(&self) -> bool {
@@ -423,6 +435,7 @@ async fn execute(jobs: &Arc<Jobs>, job: ClaimedJob) -> Result<JobStatus, sqlx::E
         last_write: Instant::now(),
         upload: shared.then(|| SeriesUpload::new(dir.clone())),
         last_upload: Instant::now(),
+        part: (0, 1),
     };
     let limits = jobs.config.limits();
     let span = tracing::Span::current();

@@ -200,7 +200,10 @@ async fn progress_is_written_only_by_the_attempt_holding_the_job(store: &JobStor
     let attempt = claim(store).await.attempt();
 
     store.set_started(id, attempt, 1200).await.unwrap();
-    store.set_progress(id, attempt, 40, 0.125).await.unwrap();
+    store
+        .set_progress(id, attempt, 40, 0.125, (0, 1))
+        .await
+        .unwrap();
     let held = row(store, id).await;
     assert_eq!(held.particles, Some(1200));
     assert_eq!((held.step, held.simulated_time), (40, 0.125));
@@ -208,7 +211,10 @@ async fn progress_is_written_only_by_the_attempt_holding_the_job(store: &JobStor
     // another attempt's writes change nothing
     for other in [attempt - 1, attempt + 1] {
         store.set_started(id, other, 7).await.unwrap();
-        store.set_progress(id, other, 99, 0.4).await.unwrap();
+        store
+            .set_progress(id, other, 99, 0.4, (0, 1))
+            .await
+            .unwrap();
     }
     let fenced = row(store, id).await;
     assert_eq!(fenced.particles, Some(1200));
@@ -228,7 +234,10 @@ async fn progress_is_written_only_by_the_attempt_holding_the_job(store: &JobStor
         .await
         .unwrap());
     store.set_started(id, attempt, 7).await.unwrap();
-    store.set_progress(id, attempt, 99, 0.4).await.unwrap();
+    store
+        .set_progress(id, attempt, 99, 0.4, (0, 1))
+        .await
+        .unwrap();
     let ended = row(store, id).await;
     assert_eq!(ended.particles, Some(1200));
     assert_eq!((ended.step, ended.simulated_time), (41, 0.13));
@@ -413,7 +422,7 @@ async fn delete_removes_the_job_and_its_rows_and_no_other_job_s(store: &JobStore
     let kept_attempt = claim(store).await.attempt();
     let gone_attempt = claim(store).await.attempt();
     store
-        .set_progress(gone, gone_attempt, 10, 0.01)
+        .set_progress(gone, gone_attempt, 10, 0.01, (0, 1))
         .await
         .unwrap();
     if let JobStore::Postgres(pg) = store {
@@ -439,7 +448,7 @@ async fn delete_removes_the_job_and_its_rows_and_no_other_job_s(store: &JobStore
     // the worker still running it writes nothing and brings nothing back
     store.set_started(gone, gone_attempt, 7).await.unwrap();
     store
-        .set_progress(gone, gone_attempt, 20, 0.02)
+        .set_progress(gone, gone_attempt, 20, 0.02, (0, 1))
         .await
         .unwrap();
     assert!(!late_success(store, gone, gone_attempt).await);

@@ -44,6 +44,9 @@ async fn a_job_with_uncertainty_serves_the_half_widths() {
     assert_conforms("GET", "/v1/jobs/{id}", 200, &job);
     let levels = job["summary"]["uncertainty"]["levels"].as_array().unwrap();
     assert_eq!(levels.len(), 4, "{job:#}");
+    // the progress counted the ladder's seven parts
+    assert_eq!(job["progress"]["parts"], 7, "{job:#}");
+    assert_eq!(job["progress"]["part"], 6, "{job:#}");
 
     let (status, content_type, csv) = app
         .get_csv(&format!("/v1/jobs/{id}/loads_uncertainty"))
@@ -77,6 +80,7 @@ async fn a_job_with_uncertainty_serves_the_half_widths() {
     let plain = app.submit(&tiny_case(0.002)).await;
     let job = app.wait_finished(&plain).await;
     assert_eq!(job["uncertainty"], false);
+    assert_eq!(job["progress"]["parts"], 1);
     let (_, _, csv) = app
         .get_csv(&format!("/v1/jobs/{plain}/loads_uncertainty"))
         .await;

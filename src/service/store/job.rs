@@ -68,11 +68,14 @@ pub struct JobRow {
     pub run_dir: Option<String>,
     /// Submitted with `?uncertainty=true`: the run is the resolution ladder.
     pub uncertainty: bool,
+    /// The part of the ladder running (from 0) and the parts in all (1 without a ladder).
+    pub part: i64,
+    pub parts: i64,
 }
 
 /// The columns of [`JobRow`], in the order of [`RawJob`].
 pub(super) const COLUMNS: &str = "id, name, status, created_at, started_at, finished_at, step, \
-     simulated_time, end_time, particles, reason, summary, attempts, worker, run_dir, uncertainty";
+     simulated_time, end_time, particles, reason, summary, attempts, worker, run_dir, uncertainty, part, parts";
 
 /// A row as both databases return it (text ids and statuses); [`RawJob::into_row`]
 /// checks them.
@@ -94,6 +97,8 @@ pub(super) struct RawJob {
     worker: Option<String>,
     run_dir: Option<String>,
     uncertainty: bool,
+    part: i64,
+    parts: i64,
 }
 
 impl RawJob {
@@ -118,6 +123,8 @@ impl RawJob {
             worker: self.worker,
             run_dir: self.run_dir,
             uncertainty: self.uncertainty,
+            part: self.part,
+            parts: self.parts,
         })
     }
 }

@@ -108,8 +108,8 @@ impl JobStore {
         // statements at once count the queue without each other's insert
         let sql = format!(
             "INSERT INTO jobs (id, name, status, case_json, created_at, end_time, uncertainty)
-             SELECT $1, $2, 'queued', $3, $4, $5, $7
-             WHERE (SELECT COUNT(*) FROM jobs WHERE status = 'queued') < $6
+             SELECT $1, $2, 'queued', $3, $4, $5, $6
+             WHERE (SELECT COUNT(*) FROM jobs WHERE status = 'queued') < $7
              RETURNING {COLUMNS}"
         );
         let (id, now, capacity) = (id.to_string(), now_rfc3339(), capacity as i64);
@@ -121,8 +121,8 @@ impl JobStore {
                     .bind(case_json)
                     .bind(&now)
                     .bind(end_time)
-                    .bind(capacity)
                     .bind(uncertainty)
+                    .bind(capacity)
                     .fetch_optional($executor)
                     .await?
             };
@@ -310,13 +310,16 @@ impl JobStore {
         attempt: i64,
         step: u64,
         simulated_time: f64,
+        part: (u64, u64),
     ) -> Result<(), sqlx::Error> {
-        let sql = "UPDATE jobs SET step = $1, simulated_time = $2
-             WHERE id = $3 AND attempts = $4 AND status = 'running'";
+        let sql = "UPDATE jobs SET step = $1, simulated_time = $2, part = $3, parts = $4
+             WHERE id = $5 AND attempts = $6 AND status = 'running'";
         either!(self, s => {
             sqlx::query(sql)
                 .bind(step as i64)
                 .bind(simulated_time)
+                .bind(part.0 as i64)
+                .bind(part.1 as i64)
                 .bind(id.to_string())
                 .bind(attempt)
                 .execute(&s.pool)
