@@ -9,7 +9,7 @@ use super::sign_in::{sign_in, sign_in_form, SignIn};
 use super::store::{Admission, JobRow, JobStatus};
 use super::workers::Jobs;
 use crate::analysis::envelope::impact_advice;
-use crate::case::{parse_case_str, parse_case_value, validate};
+use crate::case::{parse_case_str, parse_case_value, ValidCase};
 use crate::output::flow::{
     flow_svg, parse_window, read_snapshot, snapshot_times, title, FlowField, Snapshot,
     SnapshotError,
@@ -198,14 +198,13 @@ async fn submit_job(
     };
     let value: Value =
         serde_json::from_str(&case_text).map_err(|e| ApiError::MalformedJson(e.to_string()))?;
-    let case = parse_case_value(value).map_err(ApiError::InvalidCase)?;
-    validate(&case, &config.limits()).map_err(ApiError::InvalidCase)?;
+    let case = parse_case_value(value)
+        .and_then(|case| ValidCase::new(case, &config.limits()))
+        .map_err(ApiError::InvalidCase)?;
     if uncertainty {
         // every level of the ladder laid out and validated before the job is queued
-        let valid = crate::case::ValidCase::new(case.clone(), &config.limits())
-            .map_err(ApiError::InvalidCase)?;
         ladder::plan(&case, ladder::RATIO, ladder::LEVELS, ladder::MEMBERS)
-            .and_then(|parts| ladder::part_cases(&valid, &parts))
+            .and_then(|parts| ladder::part_cases(&case, &parts))
             .map_err(ApiError::InvalidCase)?;
     }
     if state.jobs.is_stopping() {
