@@ -4,7 +4,8 @@
 //!
 //! Layout: the run directory holds the user's run exactly as without the option, plus
 //! `levels/<part>/` for every coarser part, `loads_uncertainty.csv`,
-//! `probes_uncertainty.csv` (when there are probes) and `summary.json`'s `uncertainty`.
+//! `probes_uncertainty.csv` (when there are probes), `bodies_uncertainty.csv` (when
+//! there are bodies) and `summary.json`'s `uncertainty`.
 
 use super::{run_case_placed, write_summary, Observer, RunError, RunStatus, Summary};
 use crate::analysis::uncertainty::{
@@ -407,7 +408,7 @@ fn combine_file(
     Ok(out)
 }
 
-/// Write `loads_uncertainty.csv` and `probes_uncertainty.csv` from the parts' run
+/// Write `loads_uncertainty.csv`, `probes_uncertainty.csv` and `bodies_uncertainty.csv` from the parts' run
 /// directories (`dirs[0]` the user's) and return the summary block (levels and times
 /// are filled in by the caller).
 pub fn combine(
@@ -433,6 +434,17 @@ pub fn combine(
         "probes",
         "probe",
         &["pressure"],
+    )?;
+    // the bodies' motion, for drop tests: bodies.csv holds states, not interval means,
+    // so its columns are compared as they are (no filter) and have no impulse or peak
+    combine_file(
+        out_dir,
+        parts,
+        dirs,
+        0.0,
+        "bodies",
+        "body",
+        &["x", "y", "angle", "vx", "vy", "omega"],
     )?;
     // one line per body or probe naming the readings outside the expected behaviour
     let notes = bodies

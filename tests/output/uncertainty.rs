@@ -112,6 +112,13 @@ fn the_ladder_files_carry_the_finest_rows_and_their_half_widths() {
             text.push_str(&format!("{t},wedge,0,{fy},0\n"));
         }
         std::fs::write(dir.join("loads.csv"), text).unwrap();
+        // a body whose fall speed reads 6 m/s (1 + 0.1 (h/h_0)^1.5) at every row
+        let mut bodies = String::from("time,body,x,y,angle,vx,vy,omega\n");
+        for i in 1..=100 {
+            let vy = -6.0 * (1.0 + 0.1 * (p.spacing / h0).powf(1.5));
+            bodies.push_str(&format!("{},wedge,0,0.1,0,0,{vy},0\n", i as f64 * 1e-4));
+        }
+        std::fs::write(dir.join("bodies.csv"), bodies).unwrap();
         dirs.push(dir);
     }
     let summary = combine(&out, &parts, &dirs, 5e-4).unwrap();
@@ -142,6 +149,19 @@ fn the_ladder_files_carry_the_finest_rows_and_their_half_widths() {
     assert_eq!(fy.column, "fy");
     assert!((fy.impulse.order - 1.5).abs() < 1e-3, "{:?}", fy.impulse);
     assert!(fy.rows_well_behaved > 0.8, "{}", fy.rows_well_behaved);
+    // the motion's band, unfiltered: every row the exact 1.25 x 0.1 x 6 m/s
+    let motion = std::fs::read_to_string(out.join("bodies_uncertainty.csv")).unwrap();
+    let mut lines = motion.lines();
+    assert_eq!(
+        lines.next(),
+        Some("time,body,x,y,angle,vx,vy,omega,u_x,u_y,u_angle,u_vx,u_vy,u_omega")
+    );
+    for l in lines {
+        let f: Vec<f64> = l.split(',').skip(2).map(|v| v.parse().unwrap()).collect();
+        assert!((f[4] + 6.6).abs() < 1e-9, "{l}");
+        assert!((f[10] - 0.75).abs() < 1e-6, "{l}");
+        assert_eq!(f[7], 0.0, "{l}");
+    }
     // no probes.csv: no probes_uncertainty.csv
     assert!(!out.join("probes_uncertainty.csv").exists());
 }
