@@ -8,6 +8,7 @@
 //! there are bodies) and `summary.json`'s `uncertainty`.
 
 use super::{run_case_placed, write_summary, Observer, RunError, RunStatus, Summary};
+use crate::analysis::measure::interpolate;
 use crate::analysis::uncertainty::{
     half_width, mean_and_std, student_t95, ComponentUncertainty, Estimate, LevelSummary,
     SeriesUncertainty, UncertaintySummary,
@@ -264,19 +265,6 @@ fn read_series(path: &Path, columns: &[&str]) -> std::io::Result<Series> {
         .collect())
 }
 
-/// Linear interpolation of (times, values) at t, held constant beyond the ends.
-fn interpolate(times: &[Real], values: &[Real], t: Real) -> Real {
-    match times.iter().position(|&x| x >= t) {
-        None => *values.last().unwrap_or(&Real::NAN),
-        Some(0) => values[0],
-        Some(k) => {
-            let (t0, t1) = (times[k - 1], times[k]);
-            let a = (t - t0) / (t1 - t0);
-            values[k - 1] + a * (values[k] - values[k - 1])
-        }
-    }
-}
-
 /// The estimate of one reading from each part's value (parts in `plan` order).
 fn estimate(parts: &[Part], values: &[Real]) -> Estimate {
     let coarsest = parts.last().map_or(0, |p| p.level);
@@ -357,7 +345,18 @@ fn combine_file(
                         .copied()
                         .fold(0.0, |a: Real, x| if x.abs() > a.abs() { x } else { a }),
                 );
-                per_part.push(times0.iter().map(|&t0| interpolate(t, &f, t0)).collect());
+                let series: Vec<(Real, Real)> = t.iter().copied().zip(f).collect();
+                // held at the end values beyond the level's rows
+                let end = |t0: Real| match series.first() {
+                    Some(&(first, v)) if t0 < first => v,
+                    _ => series.last().map_or(Real::NAN, |p| p.1),
+                };
+                per_part.push(
+                    times0
+                        .iter()
+                        .map(|&t0| interpolate(&series, t0).unwrap_or_else(|| end(t0)))
+                        .collect(),
+                );
             }
             per_column.push(ComponentUncertainty {
                 column: columns[c].to_string(),
