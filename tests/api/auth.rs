@@ -71,19 +71,8 @@ async fn a_server_with_a_token_answers_only_requests_that_carry_it() {
         let (status, _, body) = get(&app, "/v1/jobs", Some(&good)).await;
         assert_eq!(status, 200, "{body}");
     }
-    let r = app
-        .client
-        .post(app.url("/v1/jobs"))
-        .bearer_auth(TOKEN)
-        .json(&tiny_case(0.002))
-        .send()
-        .await
-        .unwrap();
-    assert_eq!(r.status().as_u16(), 201);
-    let id = r.json::<Value>().await.unwrap()["id"]
-        .as_str()
-        .unwrap()
-        .to_string();
+    let job = app.submit_with_token(TOKEN, &tiny_case(0.002)).await;
+    let id = job["id"].as_str().unwrap().to_string();
     let (status, _, body) = get(&app, &format!("/v1/jobs/{id}"), Some(&bearer(TOKEN))).await;
     assert_eq!(status, 200, "{body}");
     let (status, _, body) = get(&app, &format!("/v1/jobs/{id}"), None).await;

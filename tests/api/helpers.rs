@@ -163,6 +163,30 @@ impl Api {
         r.text().await.unwrap()
     }
 
+    /// POST `case` to `path` (`/v1/jobs`, with a query), with `token` as the bearer
+    /// when given.
+    pub async fn post_case_at(
+        &self,
+        path: &str,
+        case: &Value,
+        token: Option<&str>,
+    ) -> reqwest::Response {
+        let mut request = self.client.post(self.url(path)).json(case);
+        if let Some(token) = token {
+            request = request.bearer_auth(token);
+        }
+        request.send().await.expect("request sent")
+    }
+
+    /// Submit with the bearer `token` and return the created job (asserting 201).
+    pub async fn submit_with_token(&self, token: &str, case: &Value) -> Value {
+        let r = self.post_case_at("/v1/jobs", case, Some(token)).await;
+        let status = r.status().as_u16();
+        let body: Value = r.json().await.unwrap();
+        assert_eq!(status, 201, "{body}");
+        body
+    }
+
     /// Submit and return the job id (asserting 201).
     pub async fn submit(&self, case: &Value) -> String {
         let r = self.post_case(case).await;

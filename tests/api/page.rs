@@ -403,16 +403,9 @@ async fn behind_a_token_chromium_signs_in_and_sees_the_page() {
         c.token = Some(mpsfsi::service::Token::new(TOKEN))
     })
     .await;
-    let r = app
-        .client
-        .post(app.url("/v1/jobs"))
-        .bearer_auth(TOKEN)
-        .json(&crate::helpers::tiny_case(0.002))
-        .send()
-        .await
-        .unwrap();
-    assert_eq!(r.status().as_u16(), 201);
-    let job: Value = r.json().await.unwrap();
+    let job = app
+        .submit_with_token(TOKEN, &crate::helpers::tiny_case(0.002))
+        .await;
     let id = job["id"].as_str().unwrap().to_string();
     let name = job["name"].as_str().unwrap().to_string();
     let start = Instant::now();

@@ -50,19 +50,8 @@ async fn post_sign_in(
 }
 
 async fn submit_with_token(app: &TestApp) -> String {
-    let r = app
-        .client
-        .post(app.url("/v1/jobs"))
-        .bearer_auth(TOKEN)
-        .json(&tiny_case(0.002))
-        .send()
-        .await
-        .unwrap();
-    assert_eq!(r.status().as_u16(), 201);
-    r.json::<Value>().await.unwrap()["id"]
-        .as_str()
-        .unwrap()
-        .to_string()
+    let job = app.submit_with_token(TOKEN, &tiny_case(0.002)).await;
+    job["id"].as_str().unwrap().to_string()
 }
 
 #[tokio::test(flavor = "multi_thread", worker_threads = 2)]

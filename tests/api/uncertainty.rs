@@ -9,21 +9,13 @@ use serde_json::Value;
 #[tokio::test(flavor = "multi_thread", worker_threads = 2)]
 async fn a_job_with_uncertainty_serves_the_half_widths() {
     let app = spawn_app("uncertainty", |_| {}).await;
-    let client = reqwest::Client::new();
     let post = |query: &'static str, case: Value| {
-        let client = client.clone();
-        let url = app.url(&format!("/v1/jobs{query}"));
+        let app = &app;
         async move {
-            client
-                .post(url)
-                .header("content-type", "application/json")
-                .body(serde_json::to_vec(&case).unwrap())
-                .send()
+            app.post_case_at(&format!("/v1/jobs{query}"), &case, None)
                 .await
-                .unwrap()
         }
     };
-
     let bad = post("?uncertainty=maybe", tiny_case(0.005)).await;
     assert_eq!(bad.status().as_u16(), 400);
     let mut shallow = tiny_case(0.005);
@@ -104,13 +96,9 @@ async fn a_remote_worker_s_half_widths_are_served_by_the_node() {
     let url = pg.fresh_database().await;
     let api = node(&url, "pg-uncertainty").await;
     let worker = worker_process(&url, &fresh_data_dir("pg-uncertainty-worker"), 3.0);
-    let response = reqwest::Client::new()
-        .post(api.url("/v1/jobs?uncertainty=true"))
-        .header("content-type", "application/json")
-        .body(serde_json::to_vec(&tiny_case(0.005)).unwrap())
-        .send()
-        .await
-        .unwrap();
+    let response = api
+        .post_case_at("/v1/jobs?uncertainty=true", &tiny_case(0.005), None)
+        .await;
     assert_eq!(response.status().as_u16(), 201);
     let id = response.json::<Value>().await.unwrap()["id"]
         .as_str()
