@@ -21,3 +21,4 @@ pub mod output;
 pub mod run;
 #[cfg(feature = "service")]
 pub mod service;
+pub mod state_io;

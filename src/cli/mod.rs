@@ -33,10 +33,11 @@ pub enum Command {
     /// Run a case and write the run directory (loads.csv, bodies.csv, probes.csv, summary.json, snapshots/).
     Run {
         /// Case file (JSON; the format is in README.md, its schema in api/case.schema.json).
-        case: PathBuf,
+        #[arg(required_unless_present = "resume")]
+        case: Option<PathBuf>,
         /// Run directory to write (created if missing).
-        #[arg(long)]
-        out: PathBuf,
+        #[arg(long, required_unless_present = "resume")]
+        out: Option<PathBuf>,
         /// Override one field by its dotted path, e.g. `--set time.end=0.01`,
         /// `--set scheme.laplacian=classic`, `--set bodies[0].motion.mass=12`. Repeatable.
         #[arg(long = "set", value_name = "PATH=VALUE")]
@@ -47,6 +48,14 @@ pub enum Command {
         /// `uncertainty` (docs/uncertainty.md). About twice the run's time.
         #[arg(long)]
         uncertainty: bool,
+        /// Save the run's complete state to RUN_DIR/checkpoint.bin every S seconds of
+        /// wall time (Ctrl-C saves one whatever this says); `--resume` continues from it.
+        #[arg(long, value_name = "S", value_parser = positive_seconds)]
+        checkpoint_s: Option<f64>,
+        /// Continue the run of this directory from its checkpoint.bin (left by Ctrl-C or
+        /// `--checkpoint-s`): its loads are those of an uninterrupted run, byte for byte.
+        #[arg(long, value_name = "RUN_DIR", conflicts_with_all = ["case", "out", "set", "uncertainty"])]
+        resume: Option<PathBuf>,
     },
     /// Validate a case and print its particle count, estimated steps and kernel parameters.
     Check {
@@ -157,6 +166,14 @@ pub struct BenchArgs {
     pub out: PathBuf,
 }
 
+/// A number of seconds, positive and finite.
+fn positive_seconds(text: &str) -> Result<f64, String> {
+    match text.parse::<f64>() {
+        Ok(s) if s > 0.0 && s.is_finite() => Ok(s),
+        _ => Err(format!("expected a positive number of seconds, got `{text}`")),
+    }
+}
+
 /// Run one command; returns the process exit code.
 pub fn main(cli: Cli) -> i32 {
     match cli.command {
@@ -165,7 +182,16 @@ pub fn main(cli: Cli) -> i32 {
             out,
             set,
             uncertainty,
-        } => run::run(&case, &out, &set, uncertainty),
+            checkpoint_s,
+            resume,
+        } => {
+            let every = checkpoint_s.map(std::time::Duration::from_secs_f64);
+            match (resume, case, out) {
+                (Some(dir), ..) => run::resume(&dir, every),
+                (None, Some(case), Some(out)) => run::run(&case, &out, &set, uncertainty, every),
+                _ => unreachable!("clap requires CASE and --out without --resume"),
+            }
+        }
         Command::Check {
             case,
             set,

@@ -1,20 +1,30 @@
-//! `mpsfsi run CASE --out DIR [--set PATH=VALUE]...`
+//! `mpsfsi run CASE --out DIR [--set PATH=VALUE]... [--checkpoint-s S]` and
+//! `mpsfsi run --resume DIR`.
 //!
 //! Ctrl-C (SIGINT), SIGTERM or SIGHUP ends the run after the current step: everything
-//! written stays, summary.json says `cancelled` with the step and time, exit code 1. A
-//! second signal exits at once, without summary.json.
+//! written stays, the state goes to DIR/checkpoint.bin (not for `--uncertainty`, whose
+//! levels are separate runs), summary.json says `cancelled` with the step and time, exit
+//! code 1; `--resume DIR` continues it. A second signal exits at once, without
+//! summary.json.
 
 use super::progress::ProgressBarObserver;
 use super::{report_case_error, EXIT_ERROR, EXIT_FAILED_RUN};
 use mpsfsi::analysis::envelope::impact_advice;
 use mpsfsi::case::{load_case_file, Limits, ValidCase};
 use mpsfsi::run::uncertainty as ladder;
-use mpsfsi::run::{run_case, RunStatus};
+use mpsfsi::run::{checkpoint, run_case_with, Checkpoint, RunOptions, RunStatus, Summary};
 use std::path::Path;
+use std::time::Duration;
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::Arc;
 
-pub fn run(case_path: &Path, out: &Path, overrides: &[String], uncertainty: bool) -> i32 {
+pub fn run(
+    case_path: &Path,
+    out: &Path,
+    overrides: &[String],
+    uncertainty: bool,
+    checkpoint_every: Option<Duration>,
+) -> i32 {
     let case = match load_case_file(case_path, overrides)
         .and_then(|case| ValidCase::new(case, &Limits::default()))
     {
@@ -39,13 +49,71 @@ pub fn run(case_path: &Path, out: &Path, overrides: &[String], uncertainty: bool
         );
         return EXIT_ERROR;
     }
+    let options = RunOptions {
+        checkpoint_every,
+        checkpoint_on_stop: true,
+        ..RunOptions::default()
+    };
+    execute(&case, out, uncertainty, options)
+}
+
+/// `mpsfsi run --resume DIR`: the case and the state come from DIR/checkpoint.bin.
+pub fn resume(dir: &Path, checkpoint_every: Option<Duration>) -> i32 {
+    let path = dir.join(checkpoint::FILE);
+    if !path.exists() {
+        let finished = std::fs::read_to_string(dir.join("summary.json"))
+            .ok()
+            .and_then(|t| serde_json::from_str::<Summary>(&t).ok())
+            .is_some_and(|s| s.status == RunStatus::Succeeded);
+        if finished {
+            eprintln!("error: the run in {} finished: there is nothing to resume", dir.display());
+        } else {
+            eprintln!(
+                "error: {} has no {}: the run stopped without saving one (killed, or interrupted twice); run it again with --checkpoint-s",
+                dir.display(),
+                checkpoint::FILE
+            );
+        }
+        return EXIT_ERROR;
+    }
+    let saved = match Checkpoint::read(&path) {
+        Ok(saved) => saved,
+        Err(e) => {
+            eprintln!("error: cannot resume from {}: {e}", path.display());
+            return EXIT_ERROR;
+        }
+    };
+    let case = match saved.case().map_err(|e| e.to_string()).and_then(|case| {
+        ValidCase::new(case, &Limits::default()).map_err(|e| format!("invalid case: {}: {}", e.path, e.message))
+    }) {
+        Ok(case) => case,
+        Err(e) => {
+            eprintln!("error: cannot resume from {}: {e}", path.display());
+            return EXIT_ERROR;
+        }
+    };
+    eprintln!(
+        "resuming {} at step {}, t = {:.6} s",
+        case.name, saved.header.steps, saved.header.time
+    );
+    let options = RunOptions {
+        checkpoint_every,
+        checkpoint_on_stop: true,
+        resume: Some(saved),
+        ..RunOptions::default()
+    };
+    execute(&case, dir, false, options)
+}
+
+/// Run (or resume) with the progress bar and the signal handlers, and report.
+fn execute(case: &ValidCase, out: &Path, uncertainty: bool, options: RunOptions) -> i32 {
     let interrupted = Arc::new(AtomicBool::new(false));
     let mut observer = ProgressBarObserver::for_stderr(interrupted.clone());
     stop_on_signals(interrupted, observer.line_printer());
     let result = if uncertainty {
-        ladder::run_with_uncertainty(&case, out, &mut observer)
+        ladder::run_with_uncertainty(case, out, &mut observer)
     } else {
-        run_case(&case, out, &mut observer)
+        run_case_with(case, out, &mut observer, options)
     };
     observer.finish();
     match result {
@@ -83,6 +151,13 @@ pub fn run(case_path: &Path, out: &Path, overrides: &[String], uncertainty: bool
                     };
                     let reason = summary.reason.as_deref().unwrap_or("no reason given");
                     eprintln!("error: run {status}: {reason} ({line})");
+                    if summary.status == RunStatus::Cancelled && out.join(checkpoint::FILE).exists() {
+                        eprintln!(
+                            "the state at t = {:.6} s is saved: `mpsfsi run --resume {}` continues",
+                            summary.simulated_time,
+                            out.display()
+                        );
+                    }
                     EXIT_FAILED_RUN
                 }
             }

@@ -32,6 +32,7 @@ use crate::case::{Case, Dof, Motion};
 use crate::engine::Simulation;
 use crate::geometry::{centroid, polar_moment_about_centroid, signed_area};
 use crate::math::{cross, rotate, vec2, Real, Vec2};
+use crate::state_io::{StateError, StateReader, StateWriter};
 use rapier2d_f64::prelude::{
     ColliderBuilder, LockedAxes, MassProperties, PhysicsWorld, RigidBodyBuilder, RigidBodyHandle,
     Vector,
@@ -65,6 +66,27 @@ struct FreeBody {
     /// Acceleration of the last step (a^n of the stabilisation).
     acceleration: Vec2,
     angular_acceleration: Real,
+}
+
+/// What a free body carries from one step to the next besides rapier's state.
+#[derive(serde::Serialize, serde::Deserialize)]
+struct FreeState {
+    added_mass: Real,
+    added_inertia: Real,
+    acceleration: Vec2,
+    angular_acceleration: Real,
+}
+
+fn free_state(b: &CoupledBody) -> Option<FreeState> {
+    match &b.kind {
+        BodyKind::Free(f) => Some(FreeState {
+            added_mass: f.added_mass,
+            added_inertia: f.added_inertia,
+            acceleration: f.acceleration,
+            angular_acceleration: f.angular_acceleration,
+        }),
+        BodyKind::Prescribed(_) => None,
+    }
 }
 
 #[derive(Debug, Clone)]
@@ -314,6 +336,43 @@ impl Coupling {
             state.angular_velocity = w;
         }
         self.seconds += clock.elapsed().as_secs_f64();
+    }
+
+    /// Rapier's world (bodies, contacts and their warm-start impulses) and each free
+    /// body's added mass and last acceleration (the stabilisation reads them), for a
+    /// checkpoint; [`Coupling::restore_state`] reads them back into the coupling the
+    /// same case builds.
+    pub fn save_state(
+        &self,
+        w: &mut StateWriter,
+    ) -> std::io::Result<()> {
+        w.put(&self.world)?;
+        let free: Vec<FreeState> = self.bodies.iter().filter_map(free_state).collect();
+        w.put(&free)?;
+        w.put(&self.seconds)
+    }
+
+    pub fn restore_state(&mut self, r: &mut StateReader) -> Result<(), StateError> {
+        self.world = r.take()?;
+        let saved: Vec<FreeState> = r.take()?;
+        let mut saved = saved.into_iter();
+        for b in &mut self.bodies {
+            let BodyKind::Free(f) = &mut b.kind else {
+                continue;
+            };
+            let s = saved.next().ok_or_else(|| {
+                StateError::Mismatch("fewer free bodies saved than the case has".into())
+            })?;
+            (f.added_mass, f.added_inertia) = (s.added_mass, s.added_inertia);
+            (f.acceleration, f.angular_acceleration) = (s.acceleration, s.angular_acceleration);
+        }
+        if saved.next().is_some() || self.world.bodies.len() != self.bodies.len() {
+            return Err(StateError::Mismatch(
+                "the saved bodies are not the case's".into(),
+            ));
+        }
+        self.seconds = r.take()?;
+        Ok(())
     }
 
     /// Centre of mass, angle and velocities of every body (bodies.csv), in case order.

@@ -12,6 +12,7 @@ pub mod refinement;
 pub mod resolution;
 pub mod scene;
 pub mod simulation;
+mod state;
 pub mod step;
 pub mod walls;
 mod workspace;

@@ -9,7 +9,7 @@ use crate::math::{Real, Vec2};
 use rayon::prelude::*;
 
 /// Cells of side `cell_size` covering a bounding box; particles sorted by cell.
-#[derive(Debug, Clone, Default)]
+#[derive(Debug, Clone, Default, serde::Serialize, serde::Deserialize)]
 pub struct CellGrid {
     pub origin: Vec2,
     pub cell_size: Real,
@@ -144,7 +144,7 @@ impl CellGrid {
 
 /// Compressed-sparse-row neighbour list: `indices[offsets[i]..offsets[i + 1]]` are
 /// the neighbours j != i of particle i with |x_j - x_i| < radius.
-#[derive(Debug, Clone, Default)]
+#[derive(Debug, Clone, Default, serde::Serialize, serde::Deserialize)]
 pub struct NeighborList {
     pub radius: Real,
     pub offsets: Vec<u32>,

@@ -2,7 +2,7 @@
 
 use crate::math::{Real, Vec2};
 
-#[derive(Debug, Clone, Default)]
+#[derive(Debug, Clone, Default, serde::Serialize, serde::Deserialize)]
 pub struct Particles {
     pub position: Vec<Vec2>,
     pub velocity: Vec<Vec2>,

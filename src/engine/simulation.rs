@@ -37,7 +37,7 @@ pub enum SimError {
 }
 
 /// Force and moment the fluid exerted on one wall object during the last step.
-#[derive(Debug, Clone, Copy, Default, PartialEq)]
+#[derive(Debug, Clone, Copy, Default, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct WallLoad {
     /// N/m
     pub force: Vec2,
@@ -120,7 +120,7 @@ pub enum Attempt {
 }
 
 /// Counts and timings of the run so far.
-#[derive(Debug, Clone, Default)]
+#[derive(Debug, Clone, Default, serde::Serialize, serde::Deserialize)]
 pub struct RunStatistics {
     /// Particles removed (left the domain or ran away).
     pub removed: usize,

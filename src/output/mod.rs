@@ -18,6 +18,7 @@ pub mod vtk;
 
 use crate::engine::Simulation;
 use crate::math::Real;
+use crate::state_io::{StateError, StateReader, StateWriter};
 use std::fs::File;
 use std::io::{BufWriter, Write};
 use std::path::Path;
@@ -26,6 +27,10 @@ pub const LOADS_HEADER: &str = "time,body,fx,fy,mz";
 pub const BODIES_HEADER: &str = "time,body,x,y,angle,vx,vy,omega";
 pub const PROBES_HEADER: &str = "time,probe,pressure,pressure_max";
 pub const ENERGY_HEADER: &str = "time,kinetic_energy,potential_energy,particles";
+pub const LOADS_FILE: &str = "loads.csv";
+pub const BODIES_FILE: &str = "bodies.csv";
+pub const PROBES_FILE: &str = "probes.csv";
+pub const ENERGY_FILE: &str = "energy.csv";
 
 /// Kinematics of one body at a sample time (x, y: centre of mass).
 #[derive(Debug, Clone, PartialEq)]
@@ -62,9 +67,11 @@ struct Probes {
     max: Vec<Real>,
 }
 
-fn csv_file(path: &Path, header: &str) -> std::io::Result<BufWriter<File>> {
+/// A CSV file that starts with `rows` (its header, or what a checkpoint saved), open
+/// for appending.
+fn csv_file(path: &Path, rows: &[u8]) -> std::io::Result<BufWriter<File>> {
     let mut w = BufWriter::new(File::create(path)?);
-    writeln!(w, "{header}")?;
+    w.write_all(rows)?;
     w.flush()?;
     Ok(w)
 }
@@ -80,15 +87,17 @@ impl RunWriter {
     ) -> std::io::Result<Self> {
         std::fs::create_dir_all(dir)?;
         let n = wall_names.len();
+        let n_probes = probes.len();
+        let fresh = |header: &str| format!("{header}\n").into_bytes();
         Ok(Self {
             interval: interval.filter(|v| *v > 0.0),
             next_sample: interval.unwrap_or(0.0),
             last_sample: 0.0,
             names: wall_names,
             impulse: vec![[0.0; 3]; n],
-            loads: csv_file(&dir.join("loads.csv"), LOADS_HEADER)?,
+            loads: csv_file(&dir.join(LOADS_FILE), &fresh(LOADS_HEADER))?,
             bodies: if has_bodies {
-                Some(csv_file(&dir.join("bodies.csv"), BODIES_HEADER)?)
+                Some(csv_file(&dir.join(BODIES_FILE), &fresh(BODIES_HEADER))?)
             } else {
                 None
             },
@@ -96,18 +105,90 @@ impl RunWriter {
                 None
             } else {
                 Some(Probes {
-                    file: csv_file(&dir.join("probes.csv"), PROBES_HEADER)?,
-                    now: vec![0.0; probes.len()],
-                    max: vec![Real::NEG_INFINITY; probes.len()],
+                    file: csv_file(&dir.join(PROBES_FILE), &fresh(PROBES_HEADER))?,
+                    now: vec![0.0; n_probes],
+                    max: vec![Real::NEG_INFINITY; n_probes],
                     points: probes,
                 })
             },
             energy: if energy {
-                Some(csv_file(&dir.join("energy.csv"), ENERGY_HEADER)?)
+                Some(csv_file(&dir.join(ENERGY_FILE), &fresh(ENERGY_HEADER))?)
             } else {
                 None
             },
         })
+    }
+
+    /// The sampling state (next and last sample times, the impulses and probe peaks of
+    /// the interval under way) and every file's rows so far, for a checkpoint: a run
+    /// resumed from it on another machine writes the same files.
+    pub fn save_state(
+        &mut self,
+        dir: &Path,
+        w: &mut StateWriter,
+    ) -> std::io::Result<()> {
+        self.finish()?;
+        w.put(&(self.next_sample, self.last_sample))?;
+        w.put(&self.impulse)?;
+        w.put(&self.probes.as_ref().map(|p| (&p.now, &p.max)))?;
+        for (name, present) in self.files() {
+            let rows = if present {
+                Some(std::fs::read(dir.join(name))?)
+            } else {
+                None
+            };
+            w.put(&rows)?;
+        }
+        Ok(())
+    }
+
+    /// Rewrite the files of `dir` as a checkpoint saved them and continue from its
+    /// sampling state (this writer was created for the same case).
+    pub fn restore_state(&mut self, dir: &Path, r: &mut StateReader) -> Result<(), StateError> {
+        (self.next_sample, self.last_sample) = r.take()?;
+        let impulse: Vec<[Real; 3]> = r.take()?;
+        if impulse.len() != self.impulse.len() {
+            return Err(StateError::Mismatch("the saved walls are not the case's".into()));
+        }
+        self.impulse = impulse;
+        let peaks: Option<(Vec<Real>, Vec<Real>)> = r.take()?;
+        match (&mut self.probes, peaks) {
+            (Some(p), Some((now, max))) if now.len() == p.points.len() => (p.now, p.max) = (now, max),
+            (None, None) => {}
+            _ => return Err(StateError::Mismatch("the saved probes are not the case's".into())),
+        }
+        for (name, present) in self.files() {
+            let rows: Option<Vec<u8>> = r.take()?;
+            match (present, rows) {
+                (true, Some(rows)) => {
+                    let file = csv_file(&dir.join(name), &rows)?;
+                    *self.file_mut(name) = file;
+                }
+                (false, None) => {}
+                _ => return Err(StateError::Mismatch(format!("{name} is not the case's"))),
+            }
+        }
+        Ok(())
+    }
+
+    /// The run's CSV files and whether this run writes each.
+    fn files(&self) -> [(&'static str, bool); 4] {
+        [
+            (LOADS_FILE, true),
+            (BODIES_FILE, self.bodies.is_some()),
+            (PROBES_FILE, self.probes.is_some()),
+            (ENERGY_FILE, self.energy.is_some()),
+        ]
+    }
+
+    fn file_mut(&mut self, name: &str) -> &mut BufWriter<File> {
+        match name {
+            BODIES_FILE => self.bodies.as_mut(),
+            PROBES_FILE => self.probes.as_mut().map(|p| &mut p.file),
+            ENERGY_FILE => self.energy.as_mut(),
+            _ => Some(&mut self.loads),
+        }
+        .expect("only the files this run writes")
     }
 
     /// Record the step that just ended (`dt` long, ending at `sim.time`); write rows when a

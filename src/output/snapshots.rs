@@ -166,6 +166,23 @@ impl SnapshotWriter {
         Ok(())
     }
 
+    /// The next snapshot time and the collection so far, for a checkpoint (the `.vtu`
+    /// files stay where they were written).
+    pub fn save_state(
+        &self,
+        w: &mut crate::state_io::StateWriter,
+    ) -> std::io::Result<()> {
+        w.put(&(self.next_time, &self.entries))
+    }
+
+    pub fn restore_state(
+        &mut self,
+        r: &mut crate::state_io::StateReader,
+    ) -> Result<(), crate::state_io::StateError> {
+        (self.next_time, self.entries) = r.take()?;
+        Ok(self.write_collection()?)
+    }
+
     /// The collection is complete after every `record`; nothing is pending.
     pub fn finish(&mut self) -> std::io::Result<()> {
         self.write_collection()

@@ -265,7 +265,7 @@ pub const PARTICLES_PART: u32 = 0;
 pub const WALLS_PART: u32 = 1;
 
 /// One entry of a `.pvd` collection.
-#[derive(Debug, Clone, PartialEq)]
+#[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct PvdEntry {
     pub time: Real,
     /// Path of the `.vtu`, relative to the `.pvd`.

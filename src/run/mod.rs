@@ -6,12 +6,17 @@ use crate::case::{self, Case, Scheme, ValidCase};
 use crate::coupling::Coupling;
 use crate::engine::{Attempt, SimError, Simulation, StageTimes, StepInfo};
 use crate::math::{vec2, Real};
+use crate::output::snapshots::SnapshotWriter;
 use crate::output::RunWriter;
+use crate::state_io::StateError;
 use serde::{Deserialize, Serialize};
 use std::path::Path;
-use std::time::Instant;
+use std::time::{Duration, Instant};
 
+pub mod checkpoint;
 pub mod uncertainty;
+
+pub use checkpoint::Checkpoint;
 
 /// Where a run is, reported after every step.
 #[derive(Debug, Clone, Copy, Default, Serialize)]
@@ -44,6 +49,9 @@ pub trait Observer {
     fn is_cancelled(&self) -> bool {
         false
     }
+    /// Called after a checkpoint of `bytes` bytes was saved at `path`, at simulated
+    /// time `time` ([`RunOptions`]).
+    fn checkpoint_saved(&mut self, _path: &Path, _time: Real, _bytes: u64) {}
     /// Status and reason of summary.json when the run stops because `is_cancelled` said
     /// so (at `step`, simulated time `time`). Default: `cancelled`. The service's
     /// observer says `failed` / `interrupted` when its own shutdown stopped the job, so
@@ -122,6 +130,9 @@ pub struct Summary {
 pub enum RunError {
     #[error("cannot write the run directory: {0}")]
     Io(#[from] std::io::Error),
+    /// The checkpoint to resume from does not fit the case or cannot be read.
+    #[error("cannot resume: {0}")]
+    Resume(#[from] StateError),
 }
 
 /// The step from `time` of at most `dt` that lands on `end` without a sliver: when a
@@ -198,7 +209,7 @@ pub fn run_case(
     out_dir: &Path,
     observer: &mut dyn Observer,
 ) -> Result<Summary, RunError> {
-    run_case_placed(case, out_dir, observer, None)
+    run_case_with(case, out_dir, observer, RunOptions::default())
 }
 
 /// [`run_case`] with the particle lattice at `phase` of a lattice-offset ensemble's
@@ -209,49 +220,173 @@ pub fn run_case_placed(
     observer: &mut dyn Observer,
     phase: Option<Real>,
 ) -> Result<Summary, RunError> {
+    let options = RunOptions {
+        phase,
+        ..RunOptions::default()
+    };
+    run_case_with(case, out_dir, observer, options)
+}
+
+/// How a run is carried out, beyond its case.
+#[derive(Default)]
+pub struct RunOptions {
+    /// Lattice placement of a lattice-offset ensemble ([`Simulation::placed`]).
+    pub phase: Option<Real>,
+    /// Save a checkpoint ([`checkpoint::FILE`] in the run directory) every this much
+    /// wall-clock time.
+    pub checkpoint_every: Option<Duration>,
+    /// Save one when the run stops because the observer asked (Ctrl-C, a worker's
+    /// shutdown), so that it can be resumed.
+    pub checkpoint_on_stop: bool,
+    /// Continue from this checkpoint (of the same case) instead of t = 0.
+    pub resume: Option<Checkpoint>,
+}
+
+/// What a run holds between steps: the simulation, the coupling, the writers and the
+/// extremes summary.json reports.
+struct Run {
+    sim: Simulation,
+    coupling: Option<Coupling>,
+    writer: RunWriter,
+    snapshots: Option<SnapshotWriter>,
+    min_dt: Real,
+    max_dt: Real,
+    max_velocity: Real,
+}
+
+impl Run {
+    /// The run at t = 0, its files created (and the first snapshot written).
+    fn start(case: &Case, out_dir: &Path, phase: Option<Real>) -> std::io::Result<Self> {
+        let sim = Simulation::placed(case, phase);
+        let coupling = Coupling::new(case, &sim);
+        let probes = crate::output::probes::points(case, &sim);
+        let writer = RunWriter::create(
+            out_dir,
+            case.output.load_interval.seconds(case.time.end),
+            sim.wall_names(),
+            coupling.is_some(),
+            probes,
+            case.output.energy,
+        )?;
+        let snapshots = SnapshotWriter::create(
+            out_dir,
+            case.output.snapshot_interval.seconds(case.time.end),
+        )?;
+        Ok(Self {
+            sim,
+            coupling,
+            writer,
+            snapshots,
+            min_dt: Real::INFINITY,
+            max_dt: 0.0,
+            max_velocity: 0.0,
+        })
+    }
+
+    /// Replace the state at t = 0 by a checkpoint's (of the same case, checked).
+    fn restore(&mut self, case: &Case, out_dir: &Path, saved: &Checkpoint) -> Result<(), StateError> {
+        if saved.header.case_json != checkpoint::case_text(case) {
+            return Err(StateError::Mismatch(
+                "it was taken of another case".into(),
+            ));
+        }
+        let h = &saved.header;
+        (self.min_dt, self.max_dt, self.max_velocity) = (h.min_dt, h.max_dt, h.max_velocity);
+        let mut r = saved.state();
+        self.sim.restore_state(&mut r)?;
+        if let Some(c) = &mut self.coupling {
+            c.restore_state(&mut r)?;
+        }
+        self.writer.restore_state(out_dir, &mut r)?;
+        if let Some(s) = &mut self.snapshots {
+            s.restore_state(&mut r)?;
+        }
+        r.finish()
+    }
+
+    /// Save the state at the end of the last step to the run directory's checkpoint;
+    /// its size in bytes.
+    fn save(&mut self, case: &Case, out_dir: &Path, phase: Option<Real>, wall_time_s: f64) -> std::io::Result<u64> {
+        let header = checkpoint::Header {
+            case_json: checkpoint::case_text(case),
+            phase,
+            time: self.sim.time,
+            steps: self.sim.steps,
+            wall_time_s,
+            min_dt: self.min_dt,
+            max_dt: self.max_dt,
+            max_velocity: self.max_velocity,
+        };
+        let Self { sim, coupling, writer, snapshots, .. } = self;
+        checkpoint::write(&out_dir.join(checkpoint::FILE), &header, |w| {
+            sim.save_state(w)?;
+            if let Some(c) = coupling {
+                c.save_state(w)?;
+            }
+            writer.save_state(out_dir, w)?;
+            if let Some(s) = snapshots {
+                s.save_state(w)?;
+            }
+            Ok(())
+        })
+    }
+}
+
+/// [`run_case`] with [`RunOptions`]: a lattice placement, checkpoints, a resumed start.
+pub fn run_case_with(
+    case: &ValidCase,
+    out_dir: &Path,
+    observer: &mut dyn Observer,
+    options: RunOptions,
+) -> Result<Summary, RunError> {
     let case: &Case = case;
     let started = Instant::now();
-    let mut sim = Simulation::placed(case, phase);
-    let mut coupling = Coupling::new(case, &sim);
-    let probes = crate::output::probes::points(case, &sim);
-    let mut writer = RunWriter::create(
-        out_dir,
-        case.output.load_interval.seconds(case.time.end),
-        sim.wall_names(),
-        coupling.is_some(),
-        probes,
-        case.output.energy,
-    )?;
-    let mut snapshots = crate::output::snapshots::SnapshotWriter::create(
-        out_dir,
-        case.output.snapshot_interval.seconds(case.time.end),
-    )?;
-    if let Some(s) = &mut snapshots {
-        s.record(&sim)?;
-    }
-    observer.started(sim.particle_count(), estimate_steps(case));
-    let (mut min_dt, mut max_dt, mut max_velocity) = (Real::INFINITY, 0.0 as Real, 0.0 as Real);
+    let phase = options
+        .resume
+        .as_ref()
+        .map_or(options.phase, |c| c.header.phase);
+    let mut run = Run::start(case, out_dir, phase)?;
+    let wall_before = match &options.resume {
+        Some(saved) => {
+            run.restore(case, out_dir, saved)?;
+            saved.header.wall_time_s
+        }
+        None => {
+            if let Some(s) = &mut run.snapshots {
+                s.record(&run.sim)?;
+            }
+            0.0
+        }
+    };
+    let wall_time = || wall_before + started.elapsed().as_secs_f64();
+    observer.started(run.sim.particle_count(), estimate_steps(case));
     let end = case.time.end;
     let mut failure: Option<(RunStatus, String)> = None;
-    while sim.time < end * (1.0 - 1e-12) {
+    let mut last_checkpoint = Instant::now();
+    while run.sim.time < end * (1.0 - 1e-12) {
         if observer.is_cancelled() {
-            failure = Some(observer.stop_reason(sim.steps, sim.time));
+            failure = Some(observer.stop_reason(run.sim.steps, run.sim.time));
+            if options.checkpoint_on_stop {
+                let bytes = run.save(case, out_dir, phase, wall_time())?;
+                observer.checkpoint_saved(&out_dir.join(checkpoint::FILE), run.sim.time, bytes);
+            }
             break;
         }
+        let Run { sim, coupling, writer, snapshots, min_dt, max_dt, max_velocity } = &mut run;
         let dt = step_to_end(sim.time, end, sim.next_dt());
-        match advance(&mut sim, coupling.as_mut(), dt) {
+        match advance(sim, coupling.as_mut(), dt) {
             Ok(info) => {
                 let dt = info.dt;
-                min_dt = min_dt.min(dt);
-                max_dt = max_dt.max(dt);
-                max_velocity = max_velocity.max(info.max_speed);
+                *min_dt = min_dt.min(dt);
+                *max_dt = max_dt.max(dt);
+                *max_velocity = max_velocity.max(info.max_speed);
                 let bodies = coupling
                     .as_ref()
-                    .map(|c| c.samples(&sim))
+                    .map(|c| c.samples(sim))
                     .unwrap_or_default();
-                writer.record(&sim, dt, &bodies)?;
-                if let Some(s) = &mut snapshots {
-                    s.record(&sim)?;
+                writer.record(sim, dt, &bodies)?;
+                if let Some(s) = snapshots {
+                    s.record(sim)?;
                 }
                 observer.progress(&Progress {
                     step: sim.steps,
@@ -267,10 +402,26 @@ pub fn run_case_placed(
                 break;
             }
         }
+        let due = options
+            .checkpoint_every
+            .is_some_and(|every| last_checkpoint.elapsed() >= every);
+        if due && run.sim.time < end * (1.0 - 1e-12) {
+            let bytes = run.save(case, out_dir, phase, wall_time())?;
+            observer.checkpoint_saved(&out_dir.join(checkpoint::FILE), run.sim.time, bytes);
+            last_checkpoint = Instant::now();
+        }
     }
+    let Run { sim, coupling, mut writer, mut snapshots, min_dt, max_dt, max_velocity } = run;
     writer.finish()?;
     if let Some(s) = &mut snapshots {
         s.finish()?;
+    }
+    if failure.is_none() {
+        // a finished run has nothing to resume
+        match std::fs::remove_file(out_dir.join(checkpoint::FILE)) {
+            Err(e) if e.kind() != std::io::ErrorKind::NotFound => return Err(e.into()),
+            _ => {}
+        }
     }
     // raw loads stay the reference; the filtered copy keeps their impulse exactly
     let filter_window_s = crate::output::filter::filter_window(case);
@@ -287,7 +438,7 @@ pub fn run_case_placed(
         particle_steps: sim.stats.particle_steps,
         simulated_time: sim.time,
         end_time: end,
-        wall_time_s: started.elapsed().as_secs_f64(),
+        wall_time_s: wall_time(),
         particles: sim.particle_count(),
         particles_removed: sim.stats.removed,
         particles_runaway: sim.stats.runaways,

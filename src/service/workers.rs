@@ -497,6 +497,16 @@ async fn execute(jobs: &Arc<Jobs>, job: ClaimedJob) -> Result<JobStatus, sqlx::E
             0,
             0.0,
         ),
+        Ok(Ok(Err(RunError::Resume(e)))) => {
+            tracing::error!(error = %e, "cannot resume from the checkpoint");
+            (
+                JobStatus::Failed,
+                Some(format!("cannot resume: {e}")),
+                None,
+                0,
+                0.0,
+            )
+        }
         Ok(Ok(Err(RunError::Io(e)))) => {
             tracing::error!(error = %e, "cannot write the run directory");
             (

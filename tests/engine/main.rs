@@ -9,6 +9,7 @@ mod kernels;
 mod lattice;
 mod multi_resolution;
 mod neighbors;
+mod resume;
 mod statistics;
 mod wall_pressure;
 mod walls;

@@ -270,6 +270,7 @@ fn aggregate(a: &CsrMatrix, diag: &[Real]) -> (Vec<u32>, usize) {
     (agg, count as usize)
 }
 
+#[derive(serde::Serialize, serde::Deserialize)]
 struct Level {
     /// The operator; empty on the finest level, whose operator is the caller's matrix
     /// (not copied, and a different matrix each solve when the hierarchy is reused).
@@ -284,6 +285,7 @@ struct Level {
 }
 
 /// Work vectors of one level: residual, coarse right-hand side and coarse correction.
+#[derive(serde::Serialize, serde::Deserialize)]
 struct Work {
     res: Vec<Real>,
     bc: Vec<Real>,
@@ -291,6 +293,7 @@ struct Work {
 }
 
 /// Solve on the last level.
+#[derive(serde::Serialize, serde::Deserialize)]
 enum Coarsest {
     /// Dense Cholesky factor of the last operator.
     Dense {
@@ -476,6 +479,7 @@ fn smoothing_weight(lambda: Real, gershgorin: Real) -> Real {
 /// The multigrid hierarchy below a fine matrix that it does not hold: transfers,
 /// coarse operators, smoothers and work vectors. Owned, so that it can outlive the
 /// matrix it was built from and precondition the next one ([`super::SolverCache`]).
+#[derive(serde::Serialize, serde::Deserialize)]
 pub(crate) struct Hierarchy {
     levels: Vec<Level>,
     work: Vec<Work>,

@@ -6,7 +6,7 @@ use rayon::prelude::*;
 
 use super::{SolveError, SolveInfo};
 
-#[derive(Debug, Clone, Default)]
+#[derive(Debug, Clone, Default, serde::Serialize, serde::Deserialize)]
 pub struct CsrMatrix {
     pub n: usize,
     pub row_ptr: Vec<usize>,

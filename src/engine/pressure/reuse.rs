@@ -63,7 +63,7 @@ pub fn growth_limit(iterations_after_build: usize) -> usize {
 }
 
 /// How the hierarchies of a sequence of solves were obtained.
-#[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
 pub struct ReuseCounts {
     /// Full builds (first solve, interval, growth, renumbering, failure).
     pub builds: u64,
@@ -79,7 +79,7 @@ pub struct ReuseCounts {
 /// simulation, so that runs do not share it) and handed to [`super::solve_reusing`].
 /// Because the preconditioner of a step depends on earlier steps, the iterates (not the
 /// converged accuracy) depend on the history; a simulation is still deterministic.
-#[derive(Default)]
+#[derive(Default, serde::Serialize, serde::Deserialize)]
 pub struct SolverCache {
     hierarchy: Option<Hierarchy>,
     /// The key (particle index) of each fine row of `hierarchy`.

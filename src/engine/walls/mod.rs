@@ -23,7 +23,7 @@ use crate::math::{cross, perp, Mat2, Real, Vec2};
 use rayon::prelude::*;
 
 /// Rigid motion state of a wall object (fixed walls: all zero).
-#[derive(Debug, Clone, Copy, Default, PartialEq)]
+#[derive(Debug, Clone, Copy, Default, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct WallState {
     /// World position of the object frame's origin.
     pub position: Vec2,
@@ -148,7 +148,7 @@ pub struct WallKernels {
 
 /// Sums over the virtual lattice behind one wall object, seen from one particle.
 /// `r` below is x_k - x_i (from the particle to the virtual point).
-#[derive(Debug, Clone, Copy, Default, PartialEq)]
+#[derive(Debug, Clone, Copy, Default, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct WallTerms {
     /// Σ w(r): the wall's share of the particle number density.
     pub number_density: Real,
@@ -188,7 +188,7 @@ impl WallTerms {
 }
 
 /// One (particle, wall object) interaction of a step.
-#[derive(Debug, Clone, Copy)]
+#[derive(Debug, Clone, Copy, serde::Serialize, serde::Deserialize)]
 pub struct WallContact {
     pub object: u32,
     /// Nearest surface point.
@@ -329,7 +329,7 @@ pub fn wall_terms(
 }
 
 /// Wall contacts of every particle, in CSR form (`offsets[i]..offsets[i+1]`).
-#[derive(Debug, Clone, Default)]
+#[derive(Debug, Clone, Default, serde::Serialize, serde::Deserialize)]
 pub struct WallContacts {
     pub offsets: Vec<u32>,
     pub contacts: Vec<WallContact>,

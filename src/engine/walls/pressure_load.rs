@@ -40,7 +40,7 @@ const SAMPLES_PER_SPACING: Real = 2.0;
 /// The pressure the load integral reads at one point of a wall object's surface: the
 /// point stands for `length` of its segment, centred `along` metres from the segment's
 /// first end. The points of a wall come in the order of its segments, and along each.
-#[derive(Debug, Clone, Copy, PartialEq)]
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct SurfacePressure {
     /// Index into the wall's surface segments.
     pub segment: u32,
