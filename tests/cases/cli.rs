@@ -719,3 +719,69 @@ fn a_ladder_stopped_in_a_coarser_level_keeps_the_user_s_run() {
     assert_eq!(rows, 1 + 5, "0.01 s at 2 ms, one wall");
     assert!(!dir.join("loads_uncertainty.csv").exists());
 }
+
+/// Ctrl-C saves the run's state; `mpsfsi run --resume DIR` continues it to the end, and
+/// its loads and probes are the uninterrupted run's, byte for byte. A finished run, or a
+/// directory without a checkpoint, has nothing to resume: a one-line error.
+#[cfg(all(target_os = "linux", target_env = "gnu"))]
+#[test]
+fn resume_after_ctrl_c_gives_the_uninterrupted_loads() {
+    let (whole, stopped) = (scratch("resume-whole"), scratch("resume-stopped"));
+    let args = |dir: &Path| {
+        vec![
+            "run".to_string(),
+            tiny().to_str().unwrap().to_string(),
+            "--out".to_string(),
+            dir.to_str().unwrap().to_string(),
+            "--set".to_string(),
+            "time.end=4".to_string(), // 4000 steps, seconds of work
+        ]
+    };
+    let done = Command::new(env!("CARGO_BIN_EXE_mpsfsi"))
+        .args(args(&whole))
+        .output()
+        .unwrap();
+    assert!(done.status.success(), "{}", text(&done.stderr));
+
+    let child = Command::new(env!("CARGO_BIN_EXE_mpsfsi"))
+        .args(args(&stopped))
+        .stdout(Stdio::null())
+        .stderr(Stdio::piped())
+        .spawn()
+        .unwrap();
+    let mut child = KillOnDrop(child);
+    let started = Instant::now();
+    while data_rows(&stopped.join("loads.csv")) < 5 {
+        assert!(child.0.try_wait().unwrap().is_none(), "ended before the signal");
+        assert!(started.elapsed() < Duration::from_secs(60), "no loads");
+        std::thread::sleep(Duration::from_millis(10));
+    }
+    // SAFETY: kill(2) on our own child, not yet waited for
+    assert_eq!(unsafe { libc::kill(child.0.id() as libc::pid_t, libc::SIGINT) }, 0);
+    let status = child.0.wait().unwrap();
+    let mut stderr = String::new();
+    std::io::Read::read_to_string(child.0.stderr.as_mut().unwrap(), &mut stderr).unwrap();
+    assert_eq!(status.code(), Some(1), "{stderr}");
+    assert!(stderr.contains("--resume"), "the user is told how to go on: {stderr}");
+    assert!(stopped.join("checkpoint.bin").exists());
+    let cut = data_rows(&stopped.join("loads.csv"));
+    assert!(cut < data_rows(&whole.join("loads.csv")), "stopped before the end");
+
+    let resumed = mpsfsi(&["run", "--resume", stopped.to_str().unwrap()]);
+    assert!(resumed.status.success(), "{}", text(&resumed.stderr));
+    assert!(text(&resumed.stderr).contains("resuming tiny-water-block at step"));
+    for file in ["loads.csv", "probes.csv", "loads_filtered.csv"] {
+        let (a, b) = (std::fs::read(whole.join(file)), std::fs::read(stopped.join(file)));
+        assert!(a.unwrap() == b.unwrap(), "{file} differs from the uninterrupted run's");
+    }
+
+    let again = mpsfsi(&["run", "--resume", stopped.to_str().unwrap()]);
+    assert_eq!(again.status.code(), Some(3));
+    assert!(text(&again.stderr).contains("finished: there is nothing to resume"));
+    let empty = scratch("resume-empty");
+    let none = mpsfsi(&["run", "--resume", empty.to_str().unwrap()]);
+    assert_eq!(none.status.code(), Some(3));
+    assert!(text(&none.stderr).contains("has no checkpoint.bin"), "{}", text(&none.stderr));
+    let both = mpsfsi(&["run", tiny().to_str().unwrap(), "--resume", empty.to_str().unwrap()]);
+    assert_eq!(both.status.code(), Some(2), "clap refuses CASE with --resume");
+}
