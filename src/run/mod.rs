@@ -50,8 +50,8 @@ pub trait Observer {
         false
     }
     /// Called after a checkpoint of `bytes` bytes was saved at `path`, at simulated
-    /// time `time` ([`RunOptions`]).
-    fn checkpoint_saved(&mut self, _path: &Path, _time: Real, _bytes: u64) {}
+    /// time `time` after `steps` steps ([`RunOptions`]).
+    fn checkpoint_saved(&mut self, _path: &Path, _time: Real, _steps: u64, _bytes: u64) {}
     /// Status and reason of summary.json when the run stops because `is_cancelled` said
     /// so (at `step`, simulated time `time`). Default: `cancelled`. The service's
     /// observer says `failed` / `interrupted` when its own shutdown stopped the job, so
@@ -368,7 +368,7 @@ pub fn run_case_with(
             failure = Some(observer.stop_reason(run.sim.steps, run.sim.time));
             if options.checkpoint_on_stop {
                 let bytes = run.save(case, out_dir, phase, wall_time())?;
-                observer.checkpoint_saved(&out_dir.join(checkpoint::FILE), run.sim.time, bytes);
+                observer.checkpoint_saved(&out_dir.join(checkpoint::FILE), run.sim.time, run.sim.steps, bytes);
             }
             break;
         }
@@ -407,7 +407,7 @@ pub fn run_case_with(
             .is_some_and(|every| last_checkpoint.elapsed() >= every);
         if due && run.sim.time < end * (1.0 - 1e-12) {
             let bytes = run.save(case, out_dir, phase, wall_time())?;
-            observer.checkpoint_saved(&out_dir.join(checkpoint::FILE), run.sim.time, bytes);
+            observer.checkpoint_saved(&out_dir.join(checkpoint::FILE), run.sim.time, run.sim.steps, bytes);
             last_checkpoint = Instant::now();
         }
     }

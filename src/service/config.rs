@@ -36,6 +36,14 @@ pub struct Config {
     #[arg(long, env = "MPSFSI_MAX_ATTEMPTS", default_value_t = 3,
           value_parser = clap::value_parser!(u32).range(1..))]
     pub max_attempts: u32,
+    /// Postgres only: seconds of wall time between checkpoints of a running job (its
+    /// complete state, stored in the database); a job whose worker died resumes from the
+    /// last one. 120 s: a checkpoint costs about 1.5 us per particle to write plus its
+    /// upload (4.4 MB at 20 000 particles), under 1 % of the run up to 300 000
+    /// particles, and a killed worker loses at most two minutes of its job.
+    #[arg(long = "checkpoint-s", env = "MPSFSI_CHECKPOINT_S", default_value_t = 120.0,
+          value_parser = positive_seconds)]
+    pub checkpoint_s: f64,
     /// Jobs that may wait in the queue; beyond it submissions get 503 + Retry-After.
     #[arg(long, env = "MPSFSI_QUEUE_CAPACITY", default_value_t = 64)]
     pub queue_capacity: usize,
@@ -201,6 +209,7 @@ impl Config {
             workers: 1,
             lease_s: 30.0,
             max_attempts: 3,
+            checkpoint_s: 120.0,
             queue_capacity: 64,
             max_particles: 500_000,
             max_body_bytes: 1 << 20,
@@ -289,10 +298,19 @@ pub struct WorkerArgs {
     #[arg(long, env = "MPSFSI_MAX_ATTEMPTS", default_value_t = 3,
           value_parser = clap::value_parser!(u32).range(1..))]
     pub max_attempts: u32,
+    /// Seconds of wall time between checkpoints of a running job (its
+    /// complete state, stored in the database); a job whose worker died resumes from the
+    /// last one. 120 s: a checkpoint costs about 1.5 us per particle to write plus its
+    /// upload (4.4 MB at 20 000 particles), under 1 % of the run up to 300 000
+    /// particles, and a killed worker loses at most two minutes of its job.
+    #[arg(long = "checkpoint-s", env = "MPSFSI_CHECKPOINT_S", default_value_t = 120.0,
+          value_parser = positive_seconds)]
+    pub checkpoint_s: f64,
     /// Largest number of fluid particles a case may create (checked again at claim).
     #[arg(long, env = "MPSFSI_MAX_PARTICLES", default_value_t = 500_000)]
     pub max_particles: usize,
-    /// Seconds a shutdown waits for running jobs before giving them back to the queue.
+    /// Seconds a shutdown waits for running jobs before giving them back to the queue
+    /// (each saves a checkpoint first, from which the next claim resumes).
     #[arg(long, env = "MPSFSI_SHUTDOWN_GRACE_S", default_value_t = 10.0)]
     pub shutdown_grace_s: f64,
 }
@@ -304,6 +322,7 @@ impl From<WorkerArgs> for Config {
             workers: w.workers as usize,
             lease_s: w.lease_s,
             max_attempts: w.max_attempts,
+            checkpoint_s: w.checkpoint_s,
             max_particles: w.max_particles,
             shutdown_grace_s: w.shutdown_grace_s,
             data_dir: w.data_dir,

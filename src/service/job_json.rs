@@ -41,6 +41,7 @@ pub fn job_json(row: &JobRow) -> Value {
         "worker": row.worker,
         "run_dir": row.run_dir,
         "uncertainty": row.uncertainty,
+        "resumed_from": row.resumed_from,
         "links": {
             "self": base,
             "loads": format!("{base}/loads"),

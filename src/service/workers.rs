@@ -29,7 +29,7 @@ use crate::case::{parse_case_str, CaseError, ValidCase};
 use crate::engine::SimError;
 use crate::math::Real;
 use crate::output::series::complete_lines;
-use crate::run::{run_case, Observer, Progress, RunError, RunStatus};
+use crate::run::{run_case_with, Checkpoint, Observer, Progress, RunError, RunOptions, RunStatus};
 use std::collections::HashMap;
 use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering};
 use std::sync::{Arc, Mutex};
@@ -208,6 +208,8 @@ struct JobObserver {
     last_upload: Instant,
     /// The ladder's part running and the parts in all ((0, 1) without a ladder).
     part: (u64, u64),
+    /// The run directory (its files' lengths go with a checkpoint).
+    dir: std::path::PathBuf,
 }
 
 const PROGRESS_EVERY: Duration = Duration::from_millis(250);
@@ -218,21 +220,22 @@ const UPLOAD_EVERY: Duration = Duration::from_secs(1);
 /// appended at their byte offset, so a reader sees whole rows.
 struct SeriesUpload {
     dir: std::path::PathBuf,
-    files: Vec<(SeriesFile, u64)>,
+    /// Each file and the bytes of it the store holds; `None` until the first upload
+    /// asks the store (a resumed attempt continues after the checkpoint's rows).
+    files: Option<Vec<(SeriesFile, u64)>>,
 }
+
+/// The run files a running job uploads.
+const UPLOADED: [SeriesFile; 4] = [
+    series::LOADS,
+    series::BODIES,
+    series::PROBES,
+    series::LOADS_UNCERTAINTY,
+];
 
 impl SeriesUpload {
     fn new(dir: std::path::PathBuf) -> Self {
-        let files = [
-            series::LOADS,
-            series::BODIES,
-            series::PROBES,
-            series::LOADS_UNCERTAINTY,
-        ]
-        .into_iter()
-        .map(|f| (f, 0))
-        .collect();
-        Self { dir, files }
+        Self { dir, files: None }
     }
 
     /// Upload what the files gained; `Ok(false)` when the attempt lost the job.
@@ -245,7 +248,15 @@ impl SeriesUpload {
         let JobStore::Postgres(pg) = store else {
             return Ok(true);
         };
-        for (file, offset) in &mut self.files {
+        if self.files.is_none() {
+            let mut files = Vec::new();
+            for file in UPLOADED {
+                let held = pg.series_length(id, file.file).await;
+                files.push((file, held.map_err(std::io::Error::other)?));
+            }
+            self.files = Some(files);
+        }
+        for (file, offset) in self.files.iter_mut().flatten() {
             let bytes = match tokio::fs::read(self.dir.join(file.file)).await {
                 Ok(b) => b,
                 Err(e) if e.kind() == std::io::ErrorKind::NotFound => continue,
@@ -318,6 +329,44 @@ impl Observer for JobObserver {
         self.cancel.load(Ordering::Relaxed)
             || self.interrupt.load(Ordering::Relaxed)
             || self.lease_lost.load(Ordering::Relaxed)
+    }
+
+    /// With a shared store, the checkpoint goes there with the length each run file had
+    /// at its step, for the next claim to resume from; a cancelled job's does not.
+    fn checkpoint_saved(&mut self, path: &std::path::Path, time: Real, steps: u64, bytes: u64) {
+        let JobStore::Postgres(pg) = &self.store else {
+            return;
+        };
+        if self.cancel.load(Ordering::SeqCst) || self.lease_lost.load(Ordering::SeqCst) {
+            return;
+        }
+        let started = Instant::now();
+        let stored = std::fs::read(path).and_then(|data| {
+            let mut lengths = std::collections::BTreeMap::new();
+            for file in UPLOADED {
+                match std::fs::metadata(self.dir.join(file.file)) {
+                    Ok(m) => {
+                        lengths.insert(file.file.to_string(), m.len());
+                    }
+                    Err(e) if e.kind() == std::io::ErrorKind::NotFound => {}
+                    Err(e) => return Err(e),
+                }
+            }
+            self.runtime
+                .block_on(pg.save_checkpoint(self.id, self.attempt, time, steps, &lengths, &data))
+                .map_err(std::io::Error::other)
+        });
+        match stored {
+            Ok(true) => tracing::info!(
+                simulated_time = time,
+                steps,
+                bytes,
+                seconds = started.elapsed().as_secs_f64(),
+                "checkpoint stored"
+            ),
+            Ok(false) => self.lease_lost.store(true, Ordering::SeqCst),
+            Err(e) => tracing::warn!(error = %e, "cannot store the checkpoint"),
+        }
     }
 
     /// A user's cancel request (or DELETE): `cancelled`. Otherwise the service's shutdown
@@ -436,7 +485,15 @@ async fn execute(jobs: &Arc<Jobs>, job: ClaimedJob) -> Result<JobStatus, sqlx::E
         upload: shared.then(|| SeriesUpload::new(dir.clone())),
         last_upload: Instant::now(),
         part: (0, 1),
+        dir: dir.clone(),
     };
+    // a ladder's levels are separate runs: it starts again from its first
+    let saved = match &jobs.store {
+        JobStore::Postgres(pg) if !job.row.uncertainty => pg.checkpoint(id).await?,
+        _ => None,
+    };
+    let checkpoint_every = Duration::from_secs_f64(jobs.config.checkpoint_s);
+    let store = jobs.store.clone();
     let limits = jobs.config.limits();
     let span = tracing::Span::current();
     let run_dir = dir.clone();
@@ -448,7 +505,29 @@ async fn execute(jobs: &Arc<Jobs>, job: ClaimedJob) -> Result<JobStatus, sqlx::E
         let run = if job.row.uncertainty {
             crate::run::uncertainty::run_with_uncertainty(&case, &dir, &mut observer)
         } else {
-            run_case(&case, &dir, &mut observer)
+            let resume = saved.and_then(|bytes| match Checkpoint::from_bytes(&bytes) {
+                Ok(saved) => {
+                    tracing::info!(simulated_time = saved.header.time, "resuming from the checkpoint");
+                    Some(saved)
+                }
+                Err(e) => {
+                    tracing::warn!(error = %e, "the checkpoint is unusable: starting from t = 0");
+                    if let JobStore::Postgres(pg) = &store {
+                        let discarded = observer.runtime.block_on(pg.discard_checkpoint(id, attempt));
+                        if let Err(e) = discarded {
+                            tracing::warn!(error = %e, "cannot discard the checkpoint");
+                        }
+                    }
+                    None
+                }
+            });
+            let options = RunOptions {
+                checkpoint_every: shared.then_some(checkpoint_every),
+                checkpoint_on_stop: shared,
+                resume,
+                ..RunOptions::default()
+            };
+            run_case_with(&case, &dir, &mut observer, options)
         };
         Ok((run, observer.upload))
     })
@@ -548,6 +627,9 @@ async fn execute(jobs: &Arc<Jobs>, job: ClaimedJob) -> Result<JobStatus, sqlx::E
         .await?;
     if !recorded && !jobs.removed_if_deleted(id, &dir).await {
         tracing::warn!("another attempt holds the job: this outcome is discarded");
+    }
+    if let (true, JobStore::Postgres(pg)) = (recorded, &jobs.store) {
+        pg.drop_checkpoint(id).await?;
     }
     Ok(status)
 }

@@ -15,6 +15,7 @@ mod page;
 mod pg_server;
 mod postgres;
 mod restart;
+mod resume;
 mod retention;
 mod schema;
 mod sign_in;

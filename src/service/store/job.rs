@@ -71,11 +71,14 @@ pub struct JobRow {
     /// The part of the ladder running (from 0) and the parts in all (1 without a ladder).
     pub part: i64,
     pub parts: i64,
+    /// The simulated time the current attempt resumed from (a checkpoint), or `None`
+    /// from t = 0.
+    pub resumed_from: Option<f64>,
 }
 
 /// The columns of [`JobRow`], in the order of [`RawJob`].
 pub(super) const COLUMNS: &str = "id, name, status, created_at, started_at, finished_at, step, \
-     simulated_time, end_time, particles, reason, summary, attempts, worker, run_dir, uncertainty, part, parts";
+     simulated_time, end_time, particles, reason, summary, attempts, worker, run_dir, uncertainty, part, parts, resumed_from";
 
 /// A row as both databases return it (text ids and statuses); [`RawJob::into_row`]
 /// checks them.
@@ -99,6 +102,7 @@ pub(super) struct RawJob {
     uncertainty: bool,
     part: i64,
     parts: i64,
+    resumed_from: Option<f64>,
 }
 
 impl RawJob {
@@ -125,6 +129,7 @@ impl RawJob {
             uncertainty: self.uncertainty,
             part: self.part,
             parts: self.parts,
+            resumed_from: self.resumed_from,
         })
     }
 }

@@ -1,7 +1,8 @@
 //! The shared store: Postgres, for API nodes and workers on many machines. Workers claim
 //! under a lease ([`PgStore::claim_next`]: `FOR UPDATE SKIP LOCKED`) and renew it while
-//! the job runs; a job whose lease expired is claimed again and re-run from the start,
-//! up to the claimant's attempt limit. Every write of a worker names the attempt it
+//! the job runs; a job whose lease expired is claimed again and resumes from its last
+//! checkpoint ([`PgStore::save_checkpoint`]) or from the start, up to the claimant's
+//! attempt limit. Every write of a worker names the attempt it
 //! holds, so a worker that lost its lease (killed, or cut off and still running) can
 //! no longer change the job. The run's CSV files live here too ([`PgStore::append_series`]).
 //! The queries both stores share are in [`super::JobStore`]; `finish` there leaves
@@ -12,6 +13,7 @@ use super::job::{
 };
 use sqlx::postgres::{PgListener, PgPool, PgPoolOptions, Postgres};
 use sqlx::Transaction;
+use std::collections::BTreeMap;
 use std::time::Duration;
 use uuid::Uuid;
 
@@ -85,7 +87,7 @@ impl PgStore {
                  reason = CASE WHEN cancel_requested THEN 'cancelled by request' ELSE '{ATTEMPTS_EXHAUSTED}' END,
                  finished_at = $1, lease_until = NULL
              WHERE status = 'running' AND lease_until < now()
-               AND (cancel_requested OR attempts >= $2)"
+               AND (cancel_requested OR attempts - releases >= $2)"
         ))
         .bind(now_rfc3339())
         .bind(i64::from(by.max_attempts))
@@ -99,7 +101,11 @@ impl PgStore {
              UPDATE jobs SET status = 'running', started_at = $1, attempts = jobs.attempts + 1,
                  worker = $2, run_dir = $3 || jobs.id,
                  lease_until = now() + make_interval(secs => $4),
-                 step = 0, simulated_time = 0, particles = NULL
+                 step = COALESCE((SELECT c.step FROM job_checkpoints c WHERE c.job_id = jobs.id), 0),
+                 simulated_time = COALESCE(
+                     (SELECT c.simulated_time FROM job_checkpoints c WHERE c.job_id = jobs.id), 0),
+                 resumed_from = (SELECT c.simulated_time FROM job_checkpoints c WHERE c.job_id = jobs.id),
+                 particles = NULL
              FROM next WHERE jobs.seq = next.seq
              RETURNING {COLUMNS}, case_json"
         ))
@@ -114,12 +120,147 @@ impl PgStore {
             return Ok(None);
         };
         let claimed = claimed.into_claimed()?;
-        sqlx::query("DELETE FROM job_series WHERE job_id = $1")
-            .bind(claimed.row.id.to_string())
-            .execute(&mut *tx)
-            .await?;
+        let id = claimed.row.id.to_string();
+        let lengths: Option<(String,)> =
+            sqlx::query_as("SELECT series_lengths FROM job_checkpoints WHERE job_id = $1")
+                .bind(&id)
+                .fetch_optional(&mut *tx)
+                .await?;
+        Self::cut_series(&mut tx, &id, lengths.map(|(l,)| l).as_deref()).await?;
         tx.commit().await?;
         Ok(Some(claimed))
+    }
+
+    /// Drop what an earlier attempt uploaded after its checkpoint: each file cut to the
+    /// length `lengths` (the checkpoint's JSON map) gives it, all of it without one.
+    async fn cut_series(
+        tx: &mut Transaction<'_, Postgres>,
+        id: &str,
+        lengths: Option<&str>,
+    ) -> Result<(), sqlx::Error> {
+        let lengths: BTreeMap<String, i64> = match lengths.map(serde_json::from_str) {
+            Some(Ok(map)) => map,
+            Some(Err(e)) => return Err(sqlx::Error::Decode(Box::new(e))),
+            None => BTreeMap::new(),
+        };
+        let files: Vec<String> = lengths.keys().cloned().collect();
+        sqlx::query("DELETE FROM job_series WHERE job_id = $1 AND NOT (file = ANY($2))")
+            .bind(id)
+            .bind(&files)
+            .execute(&mut **tx)
+            .await?;
+        for (file, length) in &lengths {
+            sqlx::query("DELETE FROM job_series WHERE job_id = $1 AND file = $2 AND byte_offset >= $3")
+                .bind(id)
+                .bind(file)
+                .bind(length)
+                .execute(&mut **tx)
+                .await?;
+            // a chunk across the cut keeps its head (chunks are whole lines, and so is the
+            // checkpoint's cut)
+            sqlx::query(
+                "UPDATE job_series SET data = substring(data FROM 1 FOR ($3 - byte_offset)::int)
+                 WHERE job_id = $1 AND file = $2 AND byte_offset < $3
+                   AND byte_offset + length(data) > $3",
+            )
+            .bind(id)
+            .bind(file)
+            .bind(length)
+            .execute(&mut **tx)
+            .await?;
+        }
+        Ok(())
+    }
+
+    /// Store the checkpoint of the attempt held (replacing the last one), with the byte
+    /// length of each run file at its step; `false` when the attempt no longer holds
+    /// the job.
+    pub async fn save_checkpoint(
+        &self,
+        id: Uuid,
+        attempt: i64,
+        simulated_time: f64,
+        step: u64,
+        series_lengths: &BTreeMap<String, u64>,
+        data: &[u8],
+    ) -> Result<bool, sqlx::Error> {
+        let lengths = serde_json::to_string(series_lengths).expect("a map of lengths serialises");
+        let done = sqlx::query(
+            "INSERT INTO job_checkpoints (job_id, simulated_time, step, series_lengths, data)
+             SELECT $1, $2, $3, $4, $5
+             WHERE EXISTS (SELECT 1 FROM jobs WHERE id = $1 AND attempts = $6 AND status = 'running')
+             ON CONFLICT (job_id) DO UPDATE SET simulated_time = EXCLUDED.simulated_time,
+                 step = EXCLUDED.step, series_lengths = EXCLUDED.series_lengths, data = EXCLUDED.data",
+        )
+        .bind(id.to_string())
+        .bind(simulated_time)
+        .bind(step as i64)
+        .bind(lengths)
+        .bind(data)
+        .bind(attempt)
+        .execute(&self.pool)
+        .await;
+        match done {
+            Ok(done) => Ok(done.rows_affected() == 1),
+            Err(sqlx::Error::Database(e)) if e.is_foreign_key_violation() => Ok(false),
+            Err(e) => Err(e),
+        }
+    }
+
+    /// The job's last checkpoint, if it has one.
+    pub async fn checkpoint(&self, id: Uuid) -> Result<Option<Vec<u8>>, sqlx::Error> {
+        let row: Option<(Vec<u8>,)> =
+            sqlx::query_as("SELECT data FROM job_checkpoints WHERE job_id = $1")
+                .bind(id.to_string())
+                .fetch_optional(&self.pool)
+                .await?;
+        Ok(row.map(|(d,)| d))
+    }
+
+    /// A checkpoint the attempt held cannot use (damaged, or of another version): the
+    /// attempt starts from t = 0, without it and without anything uploaded before.
+    pub async fn discard_checkpoint(&self, id: Uuid, attempt: i64) -> Result<bool, sqlx::Error> {
+        let mut tx = self.pool.begin().await?;
+        let held = sqlx::query(
+            "UPDATE jobs SET resumed_from = NULL, step = 0, simulated_time = 0
+             WHERE id = $1 AND attempts = $2 AND status = 'running'",
+        )
+        .bind(id.to_string())
+        .bind(attempt)
+        .execute(&mut *tx)
+        .await?
+        .rows_affected()
+            == 1;
+        if held {
+            sqlx::query("DELETE FROM job_checkpoints WHERE job_id = $1")
+                .bind(id.to_string())
+                .execute(&mut *tx)
+                .await?;
+            Self::cut_series(&mut tx, &id.to_string(), None).await?;
+        }
+        tx.commit().await?;
+        Ok(held)
+    }
+
+    /// Remove a job's checkpoint (its run ended: nothing will resume it).
+    pub async fn drop_checkpoint(&self, id: Uuid) -> Result<(), sqlx::Error> {
+        sqlx::query("DELETE FROM job_checkpoints WHERE job_id = $1")
+            .bind(id.to_string())
+            .execute(&self.pool)
+            .await?;
+        Ok(())
+    }
+
+    /// How many bytes of a run file the store holds (0 when none).
+    pub async fn series_length(&self, id: Uuid, file: &str) -> Result<u64, sqlx::Error> {
+        let (length,): (Option<i64>,) = sqlx::query_as(
+            "SELECT max(byte_offset + length(data))::bigint FROM job_series WHERE job_id = $1 AND file = $2",
+        )
+        .bind(id.to_string())
+        .bind(file)
+        .fetch_one(&self.pool)
+        .await?;
+        Ok(length.unwrap_or(0).max(0) as u64)
     }
 
     /// Extend the lease of the attempt held; also reports a cancellation request.
@@ -145,12 +286,12 @@ impl PgStore {
         })
     }
 
-    /// Give a job back to the queue (a worker shutting down), and announce it; the
-    /// claim stays counted.
+    /// Give a job back to the queue (a worker shutting down, after its checkpoint), and
+    /// announce it; the claim stays counted as a fence, not against `max_attempts`.
     pub async fn release(&self, id: Uuid, attempt: i64) -> Result<bool, sqlx::Error> {
         let mut tx = self.pool.begin().await?;
         let done = sqlx::query(
-            "UPDATE jobs SET status = 'queued', lease_until = NULL, step = 0, simulated_time = 0
+            "UPDATE jobs SET status = 'queued', lease_until = NULL, releases = releases + 1
              WHERE id = $1 AND attempts = $2 AND status = 'running'",
         )
         .bind(id.to_string())
