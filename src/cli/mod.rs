@@ -170,7 +170,9 @@ pub struct BenchArgs {
 fn positive_seconds(text: &str) -> Result<f64, String> {
     match text.parse::<f64>() {
         Ok(s) if s > 0.0 && s.is_finite() => Ok(s),
-        _ => Err(format!("expected a positive number of seconds, got `{text}`")),
+        _ => Err(format!(
+            "expected a positive number of seconds, got `{text}`"
+        )),
     }
 }
 

@@ -14,9 +14,9 @@ use mpsfsi::case::{load_case_file, Limits, ValidCase};
 use mpsfsi::run::uncertainty as ladder;
 use mpsfsi::run::{checkpoint, run_case_with, Checkpoint, RunOptions, RunStatus, Summary};
 use std::path::Path;
-use std::time::Duration;
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::Arc;
+use std::time::Duration;
 
 pub fn run(
     case_path: &Path,
@@ -66,7 +66,10 @@ pub fn resume(dir: &Path, checkpoint_every: Option<Duration>) -> i32 {
             .and_then(|t| serde_json::from_str::<Summary>(&t).ok())
             .is_some_and(|s| s.status == RunStatus::Succeeded);
         if finished {
-            eprintln!("error: the run in {} finished: there is nothing to resume", dir.display());
+            eprintln!(
+                "error: the run in {} finished: there is nothing to resume",
+                dir.display()
+            );
         } else {
             eprintln!(
                 "error: {} has no {}: the run stopped without saving one (killed, or interrupted twice); run it again with --checkpoint-s",
@@ -84,7 +87,8 @@ pub fn resume(dir: &Path, checkpoint_every: Option<Duration>) -> i32 {
         }
     };
     let case = match saved.case().map_err(|e| e.to_string()).and_then(|case| {
-        ValidCase::new(case, &Limits::default()).map_err(|e| format!("invalid case: {}: {}", e.path, e.message))
+        ValidCase::new(case, &Limits::default())
+            .map_err(|e| format!("invalid case: {}: {}", e.path, e.message))
     }) {
         Ok(case) => case,
         Err(e) => {
@@ -151,7 +155,8 @@ fn execute(case: &ValidCase, out: &Path, uncertainty: bool, options: RunOptions)
                     };
                     let reason = summary.reason.as_deref().unwrap_or("no reason given");
                     eprintln!("error: run {status}: {reason} ({line})");
-                    if summary.status == RunStatus::Cancelled && out.join(checkpoint::FILE).exists() {
+                    if summary.status == RunStatus::Cancelled && out.join(checkpoint::FILE).exists()
+                    {
                         eprintln!(
                             "the state at t = {:.6} s is saved: `mpsfsi run --resume {}` continues",
                             summary.simulated_time,

@@ -342,10 +342,7 @@ impl Coupling {
     /// body's added mass and last acceleration (the stabilisation reads them), for a
     /// checkpoint; [`Coupling::restore_state`] reads them back into the coupling the
     /// same case builds.
-    pub fn save_state(
-        &self,
-        w: &mut StateWriter,
-    ) -> std::io::Result<()> {
+    pub fn save_state(&self, w: &mut StateWriter) -> std::io::Result<()> {
         w.put(&self.world)?;
         let free: Vec<FreeState> = self.bodies.iter().filter_map(free_state).collect();
         w.put(&free)?;

@@ -122,11 +122,7 @@ impl RunWriter {
     /// The sampling state (next and last sample times, the impulses and probe peaks of
     /// the interval under way) and every file's rows so far, for a checkpoint: a run
     /// resumed from it on another machine writes the same files.
-    pub fn save_state(
-        &mut self,
-        dir: &Path,
-        w: &mut StateWriter,
-    ) -> std::io::Result<()> {
+    pub fn save_state(&mut self, dir: &Path, w: &mut StateWriter) -> std::io::Result<()> {
         self.finish()?;
         w.put(&(self.next_sample, self.last_sample))?;
         w.put(&self.impulse)?;
@@ -148,14 +144,22 @@ impl RunWriter {
         (self.next_sample, self.last_sample) = r.take()?;
         let impulse: Vec<[Real; 3]> = r.take()?;
         if impulse.len() != self.impulse.len() {
-            return Err(StateError::Mismatch("the saved walls are not the case's".into()));
+            return Err(StateError::Mismatch(
+                "the saved walls are not the case's".into(),
+            ));
         }
         self.impulse = impulse;
         let peaks: Option<(Vec<Real>, Vec<Real>)> = r.take()?;
         match (&mut self.probes, peaks) {
-            (Some(p), Some((now, max))) if now.len() == p.points.len() => (p.now, p.max) = (now, max),
+            (Some(p), Some((now, max))) if now.len() == p.points.len() => {
+                (p.now, p.max) = (now, max)
+            }
             (None, None) => {}
-            _ => return Err(StateError::Mismatch("the saved probes are not the case's".into())),
+            _ => {
+                return Err(StateError::Mismatch(
+                    "the saved probes are not the case's".into(),
+                ))
+            }
         }
         for (name, present) in self.files() {
             let rows: Option<Vec<u8>> = r.take()?;

@@ -168,10 +168,7 @@ impl SnapshotWriter {
 
     /// The next snapshot time and the collection so far, for a checkpoint (the `.vtu`
     /// files stay where they were written).
-    pub fn save_state(
-        &self,
-        w: &mut crate::state_io::StateWriter,
-    ) -> std::io::Result<()> {
+    pub fn save_state(&self, w: &mut crate::state_io::StateWriter) -> std::io::Result<()> {
         w.put(&(self.next_time, &self.entries))
     }
 

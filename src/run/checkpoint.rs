@@ -107,7 +107,10 @@ pub fn write(
     file.write_all(TAG)?;
     let mut gz = GzEncoder::new(file, flate2::Compression::fast());
     gz.write_all(w.bytes())?;
-    gz.finish()?.into_inner().map_err(|e| e.into_error())?.sync_all()?;
+    gz.finish()?
+        .into_inner()
+        .map_err(|e| e.into_error())?
+        .sync_all()?;
     std::fs::rename(&tmp, path)?;
     Ok(std::fs::metadata(path)?.len())
 }

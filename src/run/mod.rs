@@ -284,11 +284,14 @@ impl Run {
     }
 
     /// Replace the state at t = 0 by a checkpoint's (of the same case, checked).
-    fn restore(&mut self, case: &Case, out_dir: &Path, saved: &Checkpoint) -> Result<(), StateError> {
+    fn restore(
+        &mut self,
+        case: &Case,
+        out_dir: &Path,
+        saved: &Checkpoint,
+    ) -> Result<(), StateError> {
         if saved.header.case_json != checkpoint::case_text(case) {
-            return Err(StateError::Mismatch(
-                "it was taken of another case".into(),
-            ));
+            return Err(StateError::Mismatch("it was taken of another case".into()));
         }
         let h = &saved.header;
         (self.min_dt, self.max_dt, self.max_velocity) = (h.min_dt, h.max_dt, h.max_velocity);
@@ -306,7 +309,13 @@ impl Run {
 
     /// Save the state at the end of the last step to the run directory's checkpoint;
     /// its size in bytes.
-    fn save(&mut self, case: &Case, out_dir: &Path, phase: Option<Real>, wall_time_s: f64) -> std::io::Result<u64> {
+    fn save(
+        &mut self,
+        case: &Case,
+        out_dir: &Path,
+        phase: Option<Real>,
+        wall_time_s: f64,
+    ) -> std::io::Result<u64> {
         let header = checkpoint::Header {
             case_json: checkpoint::case_text(case),
             phase,
@@ -317,7 +326,13 @@ impl Run {
             max_dt: self.max_dt,
             max_velocity: self.max_velocity,
         };
-        let Self { sim, coupling, writer, snapshots, .. } = self;
+        let Self {
+            sim,
+            coupling,
+            writer,
+            snapshots,
+            ..
+        } = self;
         checkpoint::write(&out_dir.join(checkpoint::FILE), &header, |w| {
             sim.save_state(w)?;
             if let Some(c) = coupling {
@@ -368,11 +383,24 @@ pub fn run_case_with(
             failure = Some(observer.stop_reason(run.sim.steps, run.sim.time));
             if options.checkpoint_on_stop {
                 let bytes = run.save(case, out_dir, phase, wall_time())?;
-                observer.checkpoint_saved(&out_dir.join(checkpoint::FILE), run.sim.time, run.sim.steps, bytes);
+                observer.checkpoint_saved(
+                    &out_dir.join(checkpoint::FILE),
+                    run.sim.time,
+                    run.sim.steps,
+                    bytes,
+                );
             }
             break;
         }
-        let Run { sim, coupling, writer, snapshots, min_dt, max_dt, max_velocity } = &mut run;
+        let Run {
+            sim,
+            coupling,
+            writer,
+            snapshots,
+            min_dt,
+            max_dt,
+            max_velocity,
+        } = &mut run;
         let dt = step_to_end(sim.time, end, sim.next_dt());
         match advance(sim, coupling.as_mut(), dt) {
             Ok(info) => {
@@ -407,11 +435,24 @@ pub fn run_case_with(
             .is_some_and(|every| last_checkpoint.elapsed() >= every);
         if due && run.sim.time < end * (1.0 - 1e-12) {
             let bytes = run.save(case, out_dir, phase, wall_time())?;
-            observer.checkpoint_saved(&out_dir.join(checkpoint::FILE), run.sim.time, run.sim.steps, bytes);
+            observer.checkpoint_saved(
+                &out_dir.join(checkpoint::FILE),
+                run.sim.time,
+                run.sim.steps,
+                bytes,
+            );
             last_checkpoint = Instant::now();
         }
     }
-    let Run { sim, coupling, mut writer, mut snapshots, min_dt, max_dt, max_velocity } = run;
+    let Run {
+        sim,
+        coupling,
+        mut writer,
+        mut snapshots,
+        min_dt,
+        max_dt,
+        max_velocity,
+    } = run;
     writer.finish()?;
     if let Some(s) = &mut snapshots {
         s.finish()?;

@@ -17,6 +17,7 @@
 //! - [`workers`]: the worker pool; `run_case` runs on blocking threads, one job at a time
 //!   per worker, with cancellation and progress through the run [`crate::run::Observer`].
 //! - [`retention`]: `--keep-days`, the periodic removal of jobs that ended long ago.
+//! - `run_files`: a running job's CSV files and checkpoints in the shared store.
 //! - [`series`]: the run directory's CSV files as JSON columns; `loads.svg` is
 //!   [`crate::output::plot::loads_svg`] of the same complete lines.
 //!
@@ -32,6 +33,7 @@ pub mod job_json;
 pub mod page;
 pub mod retention;
 pub mod routes;
+mod run_files;
 pub mod series;
 pub mod sign_in;
 pub mod startup;

@@ -22,13 +22,12 @@
 //! renewal, which finds no job), its later writes match no row, and its worker removes the
 //! run directory when the run has stopped.
 
-use super::series::{self, SeriesFile};
+use super::run_files::{store_checkpoint, Saved, SeriesUpload};
 use super::store::{Claimant, ClaimedJob, JobStatus, JobStore, Renewal};
 use super::Config;
 use crate::case::{parse_case_str, CaseError, ValidCase};
 use crate::engine::SimError;
 use crate::math::Real;
-use crate::output::series::complete_lines;
 use crate::run::{run_case_with, Checkpoint, Observer, Progress, RunError, RunOptions, RunStatus};
 use std::collections::HashMap;
 use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering};
@@ -216,67 +215,6 @@ const PROGRESS_EVERY: Duration = Duration::from_millis(250);
 /// A running job's loads reach the shared store at most this late.
 const UPLOAD_EVERY: Duration = Duration::from_secs(1);
 
-/// The part of each run CSV file not yet in the shared store: complete lines are
-/// appended at their byte offset, so a reader sees whole rows.
-struct SeriesUpload {
-    dir: std::path::PathBuf,
-    /// Each file and the bytes of it the store holds; `None` until the first upload
-    /// asks the store (a resumed attempt continues after the checkpoint's rows).
-    files: Option<Vec<(SeriesFile, u64)>>,
-}
-
-/// The run files a running job uploads.
-const UPLOADED: [SeriesFile; 4] = [
-    series::LOADS,
-    series::BODIES,
-    series::PROBES,
-    series::LOADS_UNCERTAINTY,
-];
-
-impl SeriesUpload {
-    fn new(dir: std::path::PathBuf) -> Self {
-        Self { dir, files: None }
-    }
-
-    /// Upload what the files gained; `Ok(false)` when the attempt lost the job.
-    async fn sync(
-        &mut self,
-        store: &JobStore,
-        id: Uuid,
-        attempt: i64,
-    ) -> Result<bool, std::io::Error> {
-        let JobStore::Postgres(pg) = store else {
-            return Ok(true);
-        };
-        if self.files.is_none() {
-            let mut files = Vec::new();
-            for file in UPLOADED {
-                let held = pg.series_length(id, file.file).await;
-                files.push((file, held.map_err(std::io::Error::other)?));
-            }
-            self.files = Some(files);
-        }
-        for (file, offset) in self.files.iter_mut().flatten() {
-            let bytes = match tokio::fs::read(self.dir.join(file.file)).await {
-                Ok(b) => b,
-                Err(e) if e.kind() == std::io::ErrorKind::NotFound => continue,
-                Err(e) => return Err(e),
-            };
-            let start = (*offset as usize).min(bytes.len());
-            let new = complete_lines(&bytes[start..]);
-            if new.is_empty() {
-                continue;
-            }
-            match pg.append_series(id, attempt, file.file, *offset, new).await {
-                Ok(true) => *offset += new.len() as u64,
-                Ok(false) => return Ok(false),
-                Err(e) => return Err(std::io::Error::other(e)),
-            }
-        }
-        Ok(true)
-    }
-}
-
 impl Observer for JobObserver {
     fn started(&mut self, particles: usize, estimated_steps: u64) {
         tracing::info!(particles, estimated_steps, "run started");
@@ -341,22 +279,14 @@ impl Observer for JobObserver {
             return;
         }
         let started = Instant::now();
-        let stored = std::fs::read(path).and_then(|data| {
-            let mut lengths = std::collections::BTreeMap::new();
-            for file in UPLOADED {
-                match std::fs::metadata(self.dir.join(file.file)) {
-                    Ok(m) => {
-                        lengths.insert(file.file.to_string(), m.len());
-                    }
-                    Err(e) if e.kind() == std::io::ErrorKind::NotFound => {}
-                    Err(e) => return Err(e),
-                }
-            }
-            self.runtime
-                .block_on(pg.save_checkpoint(self.id, self.attempt, time, steps, &lengths, &data))
-                .map_err(std::io::Error::other)
-        });
-        match stored {
+        let saved = Saved { path, time, steps };
+        match self.runtime.block_on(store_checkpoint(
+            pg,
+            self.id,
+            self.attempt,
+            &self.dir,
+            saved,
+        )) {
             Ok(true) => tracing::info!(
                 simulated_time = time,
                 steps,
@@ -507,13 +437,18 @@ async fn execute(jobs: &Arc<Jobs>, job: ClaimedJob) -> Result<JobStatus, sqlx::E
         } else {
             let resume = saved.and_then(|bytes| match Checkpoint::from_bytes(&bytes) {
                 Ok(saved) => {
-                    tracing::info!(simulated_time = saved.header.time, "resuming from the checkpoint");
+                    tracing::info!(
+                        simulated_time = saved.header.time,
+                        "resuming from the checkpoint"
+                    );
                     Some(saved)
                 }
                 Err(e) => {
                     tracing::warn!(error = %e, "the checkpoint is unusable: starting from t = 0");
                     if let JobStore::Postgres(pg) = &store {
-                        let discarded = observer.runtime.block_on(pg.discard_checkpoint(id, attempt));
+                        let discarded = observer
+                            .runtime
+                            .block_on(pg.discard_checkpoint(id, attempt));
                         if let Err(e) = discarded {
                             tracing::warn!(error = %e, "cannot discard the checkpoint");
                         }

@@ -150,12 +150,14 @@ impl PgStore {
             .execute(&mut **tx)
             .await?;
         for (file, length) in &lengths {
-            sqlx::query("DELETE FROM job_series WHERE job_id = $1 AND file = $2 AND byte_offset >= $3")
-                .bind(id)
-                .bind(file)
-                .bind(length)
-                .execute(&mut **tx)
-                .await?;
+            sqlx::query(
+                "DELETE FROM job_series WHERE job_id = $1 AND file = $2 AND byte_offset >= $3",
+            )
+            .bind(id)
+            .bind(file)
+            .bind(length)
+            .execute(&mut **tx)
+            .await?;
             // a chunk across the cut keeps its head (chunks are whole lines, and so is the
             // checkpoint's cut)
             sqlx::query(
