@@ -33,7 +33,7 @@ pub mod job_json;
 pub mod page;
 pub mod retention;
 pub mod routes;
-mod run_files;
+pub mod run_files;
 pub mod series;
 pub mod sign_in;
 pub mod startup;

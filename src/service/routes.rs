@@ -4,6 +4,7 @@
 use super::auth::{Access, SIGN_IN_PATH};
 use super::error::ApiError;
 use super::job_json::job_json;
+use super::run_files::snapshot_dir;
 use super::series::{self, SeriesFile};
 use super::sign_in::{sign_in, sign_in_form, SignIn};
 use super::store::{Admission, JobRow, JobStatus};
@@ -132,13 +133,12 @@ pub fn router(state: AppState, max_body_bytes: usize) -> Router {
 }
 
 /// Where a job's run directory is readable from this node: the directory its worker
-/// recorded when this host can see it, else this node's own job directory.
-fn run_dir(state: &AppState, row: &JobRow) -> std::path::PathBuf {
-    row.run_dir
-        .as_deref()
-        .map(std::path::PathBuf::from)
-        .filter(|dir| dir.is_dir())
-        .unwrap_or_else(|| state.jobs.config.job_dir(&row.id))
+/// recorded when this host can see it, else this node's own job directory (with the
+/// snapshots a shared store holds copied there).
+async fn run_dir(state: &AppState, row: &JobRow) -> Result<std::path::PathBuf, ApiError> {
+    let local = state.jobs.config.job_dir(&row.id);
+    let store = &state.jobs.store;
+    Ok(snapshot_dir(store, row.id, row.run_dir.as_deref(), local).await?)
 }
 
 fn parse_id(id: &str) -> Result<Uuid, ApiError> {
@@ -324,7 +324,7 @@ async fn get_job(
 ) -> Result<Response, ApiError> {
     let row = find_job(&state, &id).await?;
     if accepts(&headers, "text/html") {
-        let dir = run_dir(&state, &row);
+        let dir = run_dir(&state, &row).await?;
         let times = tokio::task::spawn_blocking(move || snapshot_times(&dir))
             .await
             .map_err(ApiError::internal)?
@@ -539,7 +539,7 @@ async fn get_snapshot_svg(
         .transpose()
         .map_err(|e| ApiError::BadRequest(format!("window: {e}")))?;
     let row = find_job(&state, &id).await?;
-    let dir = run_dir(&state, &row);
+    let dir = run_dir(&state, &row).await?;
     draw_snapshot(row, dir, id, query.time, move |snapshot, name| {
         flow_svg(snapshot, field, window, &title(name, snapshot)).map(|(svg, _)| svg)
     })
@@ -630,7 +630,7 @@ async fn get_surface_svg(
         ));
     }
     let row = find_job(&state, &id).await?;
-    let dir = run_dir(&state, &row);
+    let dir = run_dir(&state, &row).await?;
     let object = job_objects(&state, &row, dir.clone())
         .await?
         .find(&body)

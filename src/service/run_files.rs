@@ -1,13 +1,18 @@
 //! A running job's files in the shared store (Postgres): the CSV files uploaded as
-//! they grow ([`SeriesUpload`]) and the checkpoints a later claim resumes from
-//! ([`store_checkpoint`]).
+//! they grow and the snapshots as they are written ([`SeriesUpload`]), the checkpoints
+//! a later claim resumes from ([`store_checkpoint`]), and an API node's copy of the
+//! snapshots of a job whose worker's directory it cannot read ([`snapshot_dir`]).
 
 use super::series::{self, SeriesFile};
 use super::store::{JobStore, PgStore};
 use crate::math::Real;
 use crate::output::series::complete_lines;
+use crate::output::snapshots::{PVD_NAME, SNAPSHOT_DIR};
+use flate2::read::GzDecoder;
+use flate2::write::GzEncoder;
 use std::collections::BTreeMap;
-use std::path::Path;
+use std::io::{Read, Write};
+use std::path::{Path, PathBuf};
 use uuid::Uuid;
 
 /// The part of each run CSV file not yet in the shared store: complete lines are
@@ -17,6 +22,8 @@ pub(super) struct SeriesUpload {
     /// Each file and the bytes of it the store holds; `None` until the first upload
     /// asks the store (a resumed attempt continues after the checkpoint's rows).
     files: Option<Vec<(SeriesFile, u64)>>,
+    /// The snapshot files uploaded, and the size each had.
+    snapshots: BTreeMap<String, u64>,
 }
 
 /// The run files a running job uploads.
@@ -29,7 +36,11 @@ const UPLOADED: [SeriesFile; 4] = [
 
 impl SeriesUpload {
     pub(super) fn new(dir: std::path::PathBuf) -> Self {
-        Self { dir, files: None }
+        Self {
+            dir,
+            files: None,
+            snapshots: BTreeMap::new(),
+        }
     }
 
     /// Upload what the files gained; `Ok(false)` when the attempt lost the job.
@@ -67,8 +78,98 @@ impl SeriesUpload {
                 Err(e) => return Err(std::io::Error::other(e)),
             }
         }
+        self.sync_snapshots(pg, id, attempt).await
+    }
+
+    /// Upload the snapshot files written or grown since the last call, gzip-compressed:
+    /// the `.vtu` files first, then the collection that lists them.
+    async fn sync_snapshots(
+        &mut self,
+        pg: &PgStore,
+        id: Uuid,
+        attempt: i64,
+    ) -> Result<bool, std::io::Error> {
+        let dir = self.dir.join(SNAPSHOT_DIR);
+        let mut names = match std::fs::read_dir(&dir) {
+            Ok(entries) => entries
+                .filter_map(|e| e.ok()?.file_name().into_string().ok())
+                .filter(|n| n.ends_with(".vtu") || n == PVD_NAME)
+                .collect::<Vec<_>>(),
+            Err(e) if e.kind() == std::io::ErrorKind::NotFound => return Ok(true),
+            Err(e) => return Err(e),
+        };
+        names.sort_by_key(|n| (n == PVD_NAME, n.clone()));
+        for name in names {
+            let bytes = match tokio::fs::read(dir.join(&name)).await {
+                Ok(b) => b,
+                Err(e) if e.kind() == std::io::ErrorKind::NotFound => continue,
+                Err(e) => return Err(e),
+            };
+            if self.snapshots.get(&name) == Some(&(bytes.len() as u64)) {
+                continue;
+            }
+            let key = format!("{SNAPSHOT_DIR}/{name}");
+            match pg.put_file(id, attempt, &key, &gzip(&bytes)?).await {
+                Ok(true) => {
+                    self.snapshots.insert(name, bytes.len() as u64);
+                }
+                Ok(false) => return Ok(false),
+                Err(e) => return Err(std::io::Error::other(e)),
+            }
+        }
         Ok(true)
     }
+}
+
+fn gzip(bytes: &[u8]) -> std::io::Result<Vec<u8>> {
+    let mut gz = GzEncoder::new(Vec::new(), flate2::Compression::fast());
+    gz.write_all(bytes)?;
+    gz.finish()
+}
+
+/// Where this node reads a job's snapshots: the worker's run directory when this host
+/// can read it (`run_dir`), else `local` (this node's directory of the job), which gets
+/// the snapshot files the shared store holds and it lacks (the collection every time:
+/// it grows while the job runs). Without a shared store, `local` as it is.
+pub async fn snapshot_dir(
+    store: &JobStore,
+    id: Uuid,
+    run_dir: Option<&str>,
+    local: PathBuf,
+) -> Result<PathBuf, sqlx::Error> {
+    if let Some(dir) = run_dir.map(PathBuf::from).filter(|d| d.is_dir()) {
+        return Ok(dir);
+    }
+    let JobStore::Postgres(pg) = store else {
+        return Ok(local);
+    };
+    let stored = pg.file_sizes(id).await?;
+    let dir = local.join(SNAPSHOT_DIR);
+    for (key, _) in stored {
+        let Some(name) = key.strip_prefix(&format!("{SNAPSHOT_DIR}/")) else {
+            continue;
+        };
+        // names the worker wrote: plain file names, nothing that leaves the directory
+        let plain = !name.is_empty() && !name.contains(['/', '\\']) && !name.starts_with('.');
+        if !plain || (name != PVD_NAME && dir.join(name).is_file()) {
+            continue;
+        }
+        let Some(data) = pg.file(id, &key).await? else {
+            continue;
+        };
+        let written = (|| -> std::io::Result<()> {
+            let mut text = Vec::new();
+            GzDecoder::new(&data[..]).read_to_end(&mut text)?;
+            std::fs::create_dir_all(&dir)?;
+            let tmp = dir.join(format!(".{name}.tmp"));
+            std::fs::write(&tmp, text)?;
+            std::fs::rename(&tmp, dir.join(name))
+        })();
+        if let Err(e) = written {
+            tracing::warn!(error = %e, file = %key, "cannot copy a stored snapshot file");
+        }
+    }
+    Ok(local)
 }
 
 /// A checkpoint the run saved: its file, and the simulated time and steps it holds.

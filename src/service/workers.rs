@@ -479,15 +479,18 @@ async fn execute(jobs: &Arc<Jobs>, job: ClaimedJob) -> Result<JobStatus, sqlx::E
         tracing::warn!("the lease was lost: this attempt's outcome is discarded");
         return Ok(JobStatus::Failed);
     }
-    let interrupted = jobs.interrupt.load(Ordering::SeqCst) && !cancel.load(Ordering::SeqCst);
-    if shared && interrupted && jobs.store.release(id, attempt).await? {
-        tracing::info!("the job went back to the queue");
-        return Ok(JobStatus::Queued);
-    }
+    // everything written reaches the store first: the snapshots before a checkpoint
+    // are the next attempt's too
     if let Some(mut upload) = upload {
         if let Err(e) = upload.sync(&jobs.store, id, attempt).await {
             tracing::error!(error = %e, "cannot upload the run's files");
         }
+    }
+    let interrupted = jobs.interrupt.load(Ordering::SeqCst) && !cancel.load(Ordering::SeqCst);
+    if shared && interrupted && jobs.store.release(id, attempt).await? {
+        tracing::info!("the job went back to the queue");
+        remove_run_dir(&dir).await;
+        return Ok(JobStatus::Queued);
     }
 
     let (status, reason, summary, steps, time) = match outcome {
@@ -565,6 +568,8 @@ async fn execute(jobs: &Arc<Jobs>, job: ClaimedJob) -> Result<JobStatus, sqlx::E
     }
     if let (true, JobStore::Postgres(pg)) = (recorded, &jobs.store) {
         pg.drop_checkpoint(id).await?;
+        // the store holds what every node serves: the worker keeps nothing
+        remove_run_dir(&dir).await;
     }
     Ok(status)
 }

@@ -52,9 +52,19 @@ async fn wait_checkpoint(data: &Path) {
 async fn assert_uninterrupted_results(api: &Api, id: &str, expected: &(String, String)) {
     let (_, _, loads) = api.get_csv(&format!("/v1/jobs/{id}/loads")).await;
     let (_, _, probes) = api.get_csv(&format!("/v1/jobs/{id}/probes")).await;
-    assert_eq!(loads.lines().count(), expected.0.lines().count(), "rows of loads");
-    assert!(loads == expected.0, "the resumed job's loads differ from an uninterrupted run's");
-    assert!(probes == expected.1, "the resumed job's probes differ from an uninterrupted run's");
+    assert_eq!(
+        loads.lines().count(),
+        expected.0.lines().count(),
+        "rows of loads"
+    );
+    assert!(
+        loads == expected.0,
+        "the resumed job's loads differ from an uninterrupted run's"
+    );
+    assert!(
+        probes == expected.1,
+        "the resumed job's probes differ from an uninterrupted run's"
+    );
 }
 
 #[tokio::test(flavor = "multi_thread", worker_threads = 2)]
@@ -67,7 +77,11 @@ async fn a_killed_worker_s_job_resumes_from_its_checkpoint_with_the_uninterrupte
     let url = pg.fresh_database().await;
     let api = node(&url, "pg-resume-kill").await;
     let first_data = fresh_data_dir("pg-resume-w1");
-    let mut first = worker(&url, &first_data, &["--lease-s", "1.5", "--checkpoint-s", "0.3"]);
+    let mut first = worker(
+        &url,
+        &first_data,
+        &["--lease-s", "1.5", "--checkpoint-s", "0.3"],
+    );
     let id = api.submit(&case).await;
     api.wait_running(&id).await;
     wait_checkpoint(&first_data).await;
@@ -103,7 +117,14 @@ async fn a_sigterm_ed_worker_s_job_resumes_without_using_up_an_attempt() {
     let api = node(&url, "pg-resume-term").await;
     // two attempts allowed: the SIGTERM's release must not count, or the kill below
     // would exhaust them
-    let flags = ["--lease-s", "1.5", "--max-attempts", "2", "--shutdown-grace-s", "0"];
+    let flags = [
+        "--lease-s",
+        "1.5",
+        "--max-attempts",
+        "2",
+        "--shutdown-grace-s",
+        "0",
+    ];
     let first_data = fresh_data_dir("pg-resume-term-w1");
     let mut first = worker(&url, &first_data, &flags);
     let id = api.submit(&case).await;
@@ -116,13 +137,20 @@ async fn a_sigterm_ed_worker_s_job_resumes_without_using_up_an_attempt() {
     assert!(term.success());
     assert!(first.wait().unwrap().success(), "the worker exits cleanly");
     let log = std::fs::read_to_string(first_data.join("worker.log")).unwrap();
-    assert!(log.contains("checkpoint stored"), "SIGTERM saves a checkpoint: {log}");
+    assert!(
+        log.contains("checkpoint stored"),
+        "SIGTERM saves a checkpoint: {log}"
+    );
     let job = api.job(&id).await;
     assert_eq!(job["status"], "queued", "{job}");
 
     // the second worker resumes it and is killed after a checkpoint of its own
     let second_data = fresh_data_dir("pg-resume-term-w2");
-    let mut second = worker(&url, &second_data, &[&flags[..], &["--checkpoint-s", "0.3"]].concat());
+    let mut second = worker(
+        &url,
+        &second_data,
+        &[&flags[..], &["--checkpoint-s", "0.3"]].concat(),
+    );
     let job = api
         .wait_for(&id, Duration::from_secs(60), |j| j["attempts"] == 2)
         .await;
@@ -133,14 +161,24 @@ async fn a_sigterm_ed_worker_s_job_resumes_without_using_up_an_attempt() {
     second.wait().unwrap();
 
     let third = worker(&url, &fresh_data_dir("pg-resume-term-w3"), &flags);
-    let job = api.wait_for(&id, Duration::from_secs(90), |j| {
-        matches!(j["status"].as_str(), Some("succeeded" | "failed" | "cancelled"))
-    })
-    .await;
+    let job = api
+        .wait_for(&id, Duration::from_secs(90), |j| {
+            matches!(
+                j["status"].as_str(),
+                Some("succeeded" | "failed" | "cancelled")
+            )
+        })
+        .await;
     stop(third);
-    assert_eq!(job["status"], "succeeded", "a release spent an attempt: {job}");
+    assert_eq!(
+        job["status"], "succeeded",
+        "a release spent an attempt: {job}"
+    );
     assert_eq!(job["attempts"], 3, "{job}");
-    assert!(job["resumed_from"].as_f64().unwrap() > first_resume, "{job}");
+    assert!(
+        job["resumed_from"].as_f64().unwrap() > first_resume,
+        "{job}"
+    );
     assert_uninterrupted_results(&api, &id, &expected).await;
     api.stop().await;
 }

@@ -752,27 +752,45 @@ fn resume_after_ctrl_c_gives_the_uninterrupted_loads() {
     let mut child = KillOnDrop(child);
     let started = Instant::now();
     while data_rows(&stopped.join("loads.csv")) < 5 {
-        assert!(child.0.try_wait().unwrap().is_none(), "ended before the signal");
+        assert!(
+            child.0.try_wait().unwrap().is_none(),
+            "ended before the signal"
+        );
         assert!(started.elapsed() < Duration::from_secs(60), "no loads");
         std::thread::sleep(Duration::from_millis(10));
     }
     // SAFETY: kill(2) on our own child, not yet waited for
-    assert_eq!(unsafe { libc::kill(child.0.id() as libc::pid_t, libc::SIGINT) }, 0);
+    assert_eq!(
+        unsafe { libc::kill(child.0.id() as libc::pid_t, libc::SIGINT) },
+        0
+    );
     let status = child.0.wait().unwrap();
     let mut stderr = String::new();
     std::io::Read::read_to_string(child.0.stderr.as_mut().unwrap(), &mut stderr).unwrap();
     assert_eq!(status.code(), Some(1), "{stderr}");
-    assert!(stderr.contains("--resume"), "the user is told how to go on: {stderr}");
+    assert!(
+        stderr.contains("--resume"),
+        "the user is told how to go on: {stderr}"
+    );
     assert!(stopped.join("checkpoint.bin").exists());
     let cut = data_rows(&stopped.join("loads.csv"));
-    assert!(cut < data_rows(&whole.join("loads.csv")), "stopped before the end");
+    assert!(
+        cut < data_rows(&whole.join("loads.csv")),
+        "stopped before the end"
+    );
 
     let resumed = mpsfsi(&["run", "--resume", stopped.to_str().unwrap()]);
     assert!(resumed.status.success(), "{}", text(&resumed.stderr));
     assert!(text(&resumed.stderr).contains("resuming tiny-water-block at step"));
     for file in ["loads.csv", "probes.csv", "loads_filtered.csv"] {
-        let (a, b) = (std::fs::read(whole.join(file)), std::fs::read(stopped.join(file)));
-        assert!(a.unwrap() == b.unwrap(), "{file} differs from the uninterrupted run's");
+        let (a, b) = (
+            std::fs::read(whole.join(file)),
+            std::fs::read(stopped.join(file)),
+        );
+        assert!(
+            a.unwrap() == b.unwrap(),
+            "{file} differs from the uninterrupted run's"
+        );
     }
 
     let again = mpsfsi(&["run", "--resume", stopped.to_str().unwrap()]);
@@ -781,7 +799,20 @@ fn resume_after_ctrl_c_gives_the_uninterrupted_loads() {
     let empty = scratch("resume-empty");
     let none = mpsfsi(&["run", "--resume", empty.to_str().unwrap()]);
     assert_eq!(none.status.code(), Some(3));
-    assert!(text(&none.stderr).contains("has no checkpoint.bin"), "{}", text(&none.stderr));
-    let both = mpsfsi(&["run", tiny().to_str().unwrap(), "--resume", empty.to_str().unwrap()]);
-    assert_eq!(both.status.code(), Some(2), "clap refuses CASE with --resume");
+    assert!(
+        text(&none.stderr).contains("has no checkpoint.bin"),
+        "{}",
+        text(&none.stderr)
+    );
+    let both = mpsfsi(&[
+        "run",
+        tiny().to_str().unwrap(),
+        "--resume",
+        empty.to_str().unwrap(),
+    ]);
+    assert_eq!(
+        both.status.code(),
+        Some(2),
+        "clap refuses CASE with --resume"
+    );
 }

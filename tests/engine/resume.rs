@@ -33,7 +33,11 @@ fn scratch(name: &str) -> PathBuf {
 fn case_of(file: &str, overrides: &[&str]) -> ValidCase {
     let path = Path::new(env!("CARGO_MANIFEST_DIR")).join(file);
     let overrides: Vec<String> = overrides.iter().map(|s| s.to_string()).collect();
-    ValidCase::new(load_case_file(&path, &overrides).unwrap(), &Limits::default()).unwrap()
+    ValidCase::new(
+        load_case_file(&path, &overrides).unwrap(),
+        &Limits::default(),
+    )
+    .unwrap()
 }
 
 /// Run `case` into `dir`, stopping after each step count of `stops` and resuming from
@@ -46,8 +50,7 @@ fn run_with_stops(case: &ValidCase, dir: &Path, stops: &[u64]) {
             resume: resume.take(),
             ..RunOptions::default()
         };
-        let summary =
-            run_case_with(case, dir, &mut StopAt { at, stop: false }, options).unwrap();
+        let summary = run_case_with(case, dir, &mut StopAt { at, stop: false }, options).unwrap();
         assert_eq!(summary.status, RunStatus::Cancelled, "stopped at step {at}");
         assert_eq!(summary.steps, at);
         let saved = Checkpoint::read(&dir.join(checkpoint::FILE)).unwrap();
@@ -110,7 +113,14 @@ fn a_free_falling_wedge_resumed_twice_writes_the_uninterrupted_bytes() {
         .unwrap()
     };
     let (a, b) = (read(&whole), read(&resumed));
-    for key in ["steps", "particle_steps", "simulated_time", "min_dt", "max_dt", "max_velocity"] {
+    for key in [
+        "steps",
+        "particle_steps",
+        "simulated_time",
+        "min_dt",
+        "max_dt",
+        "max_velocity",
+    ] {
         assert_eq!(a[key], b[key], "summary.json {key}");
     }
 }
@@ -138,7 +148,11 @@ fn a_dam_break_with_the_exact_projection_and_probes_resumes_exactly() {
         RunStatus::Succeeded
     );
     run_with_stops(&case, &resumed, &[1, 55]);
-    assert_same_files(&whole, &resumed, &["loads.csv", "probes.csv", "loads_filtered.csv"]);
+    assert_same_files(
+        &whole,
+        &resumed,
+        &["loads.csv", "probes.csv", "loads_filtered.csv"],
+    );
 }
 
 #[test]

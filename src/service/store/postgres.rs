@@ -244,6 +244,53 @@ impl PgStore {
         Ok(held)
     }
 
+    /// Store (or replace) a file of the attempt's run directory, gzip-compressed by the
+    /// caller; `false` when the attempt no longer holds the job.
+    pub async fn put_file(
+        &self,
+        id: Uuid,
+        attempt: i64,
+        name: &str,
+        data: &[u8],
+    ) -> Result<bool, sqlx::Error> {
+        let done = sqlx::query(
+            "INSERT INTO job_files (job_id, name, data)
+             SELECT $1, $2, $3
+             WHERE EXISTS (SELECT 1 FROM jobs WHERE id = $1 AND attempts = $4 AND status = 'running')
+             ON CONFLICT (job_id, name) DO UPDATE SET data = EXCLUDED.data",
+        )
+        .bind(id.to_string())
+        .bind(name)
+        .bind(data)
+        .bind(attempt)
+        .execute(&self.pool)
+        .await;
+        match done {
+            Ok(done) => Ok(done.rows_affected() == 1),
+            Err(sqlx::Error::Database(e)) if e.is_foreign_key_violation() => Ok(false),
+            Err(e) => Err(e),
+        }
+    }
+
+    /// The names and sizes of a job's stored files.
+    pub async fn file_sizes(&self, id: Uuid) -> Result<Vec<(String, i64)>, sqlx::Error> {
+        sqlx::query_as("SELECT name, length(data)::bigint FROM job_files WHERE job_id = $1 ORDER BY name")
+            .bind(id.to_string())
+            .fetch_all(&self.pool)
+            .await
+    }
+
+    /// One stored file (gzip-compressed), if there is one.
+    pub async fn file(&self, id: Uuid, name: &str) -> Result<Option<Vec<u8>>, sqlx::Error> {
+        let row: Option<(Vec<u8>,)> =
+            sqlx::query_as("SELECT data FROM job_files WHERE job_id = $1 AND name = $2")
+                .bind(id.to_string())
+                .bind(name)
+                .fetch_optional(&self.pool)
+                .await?;
+        Ok(row.map(|(d,)| d))
+    }
+
     /// Remove a job's checkpoint (its run ended: nothing will resume it).
     pub async fn drop_checkpoint(&self, id: Uuid) -> Result<(), sqlx::Error> {
         sqlx::query("DELETE FROM job_checkpoints WHERE job_id = $1")
