@@ -46,6 +46,7 @@ pub fn job_json(row: &JobRow) -> Value {
             "self": base,
             "loads": format!("{base}/loads"),
             "loads_uncertainty": format!("{base}/loads_uncertainty"),
+            "loads_filtered": format!("{base}/loads_filtered"),
             "loads_svg": format!("{base}/loads.svg"),
             "snapshot_svg": format!("{base}/snapshot.svg"),
             "surface_svg": format!("{base}/surface.svg"),

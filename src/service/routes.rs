@@ -87,6 +87,11 @@ pub fn endpoints() -> Vec<(Method, &'static str, MethodRouter<AppState>)> {
         ),
         (
             Method::GET,
+            "/v1/jobs/{id}/loads_filtered",
+            on(MethodFilter::GET, get_loads_filtered),
+        ),
+        (
+            Method::GET,
             "/v1/jobs/{id}/loads.svg",
             on(MethodFilter::GET, get_loads_svg),
         ),
@@ -469,6 +474,15 @@ async fn get_probes(
     headers: HeaderMap,
 ) -> Result<Response, ApiError> {
     serve_series(state, id, headers, series::PROBES).await
+}
+
+#[tracing::instrument(name = "get filtered loads", skip(state, headers))]
+async fn get_loads_filtered(
+    State(state): State<AppState>,
+    Path(id): Path<String>,
+    headers: HeaderMap,
+) -> Result<Response, ApiError> {
+    serve_series(state, id, headers, series::LOADS_FILTERED).await
 }
 
 #[tracing::instrument(name = "get loads uncertainty", skip(state, headers))]

@@ -27,11 +27,13 @@ pub(super) struct SeriesUpload {
 }
 
 /// The run files a running job uploads.
-const UPLOADED: [SeriesFile; 4] = [
+const UPLOADED: [SeriesFile; 6] = [
     series::LOADS,
     series::BODIES,
     series::PROBES,
     series::LOADS_UNCERTAINTY,
+    series::LOADS_FILTERED,
+    series::ENERGY,
 ];
 
 impl SeriesUpload {

@@ -24,6 +24,18 @@ pub const PROBES: SeriesFile = SeriesFile {
     group: "probes",
     header: crate::output::PROBES_HEADER,
 };
+/// The zero-phase filtered loads, written when the run ends.
+pub const LOADS_FILTERED: SeriesFile = SeriesFile {
+    file: "loads_filtered.csv",
+    group: "bodies",
+    header: crate::output::LOADS_HEADER,
+};
+/// The fluid's energy (`output.energy`): kept with the job, not served as a route.
+pub const ENERGY: SeriesFile = SeriesFile {
+    file: "energy.csv",
+    group: "energy",
+    header: crate::output::ENERGY_HEADER,
+};
 /// Written when the ladder ends (`?uncertainty=true`); until then the header alone.
 pub const LOADS_UNCERTAINTY: SeriesFile = SeriesFile {
     file: "loads_uncertainty.csv",

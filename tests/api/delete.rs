@@ -7,9 +7,11 @@ use serde_json::Value;
 use std::time::{Duration, Instant};
 
 /// Every route of the job (`""` is the job itself).
-const JOB_ROUTES: [&str; 7] = [
+const JOB_ROUTES: [&str; 9] = [
     "",
     "/loads",
+    "/loads_filtered",
+    "/loads_uncertainty",
     "/bodies",
     "/probes",
     "/loads.svg",

@@ -125,11 +125,23 @@ async fn a_job_submitted_to_one_node_is_served_by_another_while_it_runs_and_afte
     );
     // neither node shares a disk with the worker, whose directory is gone: the
     // snapshots come from the store, the same pictures on both
-    let svg = a.get_svg(&format!("/v1/jobs/{id}/snapshot.svg?time=0.5")).await;
+    let svg = a
+        .get_svg(&format!("/v1/jobs/{id}/snapshot.svg?time=0.5"))
+        .await;
     assert!(svg.starts_with("<svg"), "{}", &svg[..svg.len().min(200)]);
-    assert_eq!(svg, b.get_svg(&format!("/v1/jobs/{id}/snapshot.svg?time=0.5")).await);
-    let surface = b.get_svg(&format!("/v1/jobs/{id}/surface.svg?body=tank")).await;
-    assert!(surface.starts_with("<svg"), "{}", &surface[..surface.len().min(200)]);
+    assert_eq!(
+        svg,
+        b.get_svg(&format!("/v1/jobs/{id}/snapshot.svg?time=0.5"))
+            .await
+    );
+    let surface = b
+        .get_svg(&format!("/v1/jobs/{id}/surface.svg?body=tank"))
+        .await;
+    assert!(
+        surface.starts_with("<svg"),
+        "{}",
+        &surface[..surface.len().min(200)]
+    );
     a.stop().await;
     b.stop().await;
 }

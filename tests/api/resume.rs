@@ -1,7 +1,8 @@
 //! Checkpoints on a shared store (Postgres): a job whose worker is killed (-9) resumes
 //! on another worker from its last checkpoint, a worker stopped with SIGTERM saves one
-//! and gives the job back without spending an attempt, and either way the job's loads
-//! and probes are byte for byte those of a run that was never interrupted.
+//! and gives the job back without spending an attempt, and either way the job's loads,
+//! probes and filtered loads (served by an API node that shares no disk with the
+//! workers) are byte for byte those of a run that was never interrupted.
 
 use crate::helpers::{fresh_data_dir, tiny_case, Api};
 use crate::pg_server::PgServer;
@@ -13,15 +14,19 @@ use std::path::Path;
 use std::process::{Child, Command, Stdio};
 use std::time::{Duration, Instant};
 
-/// The loads and probes of `case` run in this process, uninterrupted.
-fn uninterrupted(case: &Value, tag: &str) -> (String, String) {
+/// The loads, probes and filtered loads of `case` run in this process, uninterrupted.
+fn uninterrupted(case: &Value, tag: &str) -> (String, String, String) {
     let case = parse_case_str(&case.to_string()).unwrap();
     let case = ValidCase::new(case, &Limits::default()).unwrap();
     let dir = fresh_data_dir(tag);
     let summary = run_case(&case, &dir, &mut Quiet).unwrap();
     assert_eq!(summary.status, RunStatus::Succeeded);
     let read = |f: &str| std::fs::read_to_string(dir.join(f)).unwrap();
-    (read("loads.csv"), read("probes.csv"))
+    (
+        read("loads.csv"),
+        read("probes.csv"),
+        read("loads_filtered.csv"),
+    )
 }
 
 /// `mpsfsi worker` with its log in `data/worker.log`.
@@ -49,9 +54,14 @@ async fn wait_checkpoint(data: &Path) {
     }
 }
 
-async fn assert_uninterrupted_results(api: &Api, id: &str, expected: &(String, String)) {
+async fn assert_uninterrupted_results(api: &Api, id: &str, expected: &(String, String, String)) {
     let (_, _, loads) = api.get_csv(&format!("/v1/jobs/{id}/loads")).await;
     let (_, _, probes) = api.get_csv(&format!("/v1/jobs/{id}/probes")).await;
+    let (_, _, filtered) = api.get_csv(&format!("/v1/jobs/{id}/loads_filtered")).await;
+    assert!(
+        filtered == expected.2,
+        "the filtered loads differ from an uninterrupted run's"
+    );
     assert_eq!(
         loads.lines().count(),
         expected.0.lines().count(),
