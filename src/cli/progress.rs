@@ -90,6 +90,15 @@ impl Observer for ProgressBarObserver {
         self.interrupted.load(Ordering::SeqCst)
     }
 
+    fn checkpoint_saved(&mut self, path: &std::path::Path, time: Real, steps: u64, bytes: u64) {
+        let line = format!(
+            "checkpoint: step {steps}, t = {time:.6} s, {:.1} MB in {}",
+            bytes as f64 / 1e6,
+            path.display()
+        );
+        (self.line_printer())(&line);
+    }
+
     /// ctrlc runs one handler for SIGINT, SIGTERM and SIGHUP without saying which came.
     fn stop_reason(&self, step: u64, time: Real) -> (RunStatus, String) {
         (

@@ -279,6 +279,16 @@ impl Observer for JobObserver {
             return;
         }
         let started = Instant::now();
+        // what the run wrote up to the checkpoint (a snapshot of the last second) is in
+        // the store before the checkpoint that lists it
+        if let Some(upload) = &mut self.upload {
+            let synced = self
+                .runtime
+                .block_on(upload.sync(&self.store, self.id, self.attempt));
+            if let Err(e) = synced {
+                tracing::warn!(error = %e, "cannot upload the run's files");
+            }
+        }
         let saved = Saved { path, time, steps };
         match self.runtime.block_on(store_checkpoint(
             pg,
