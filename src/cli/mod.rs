@@ -50,7 +50,8 @@ pub enum Command {
         uncertainty: bool,
         /// Save the run's complete state to RUN_DIR/checkpoint.bin every S seconds of
         /// wall time (Ctrl-C saves one whatever this says); `--resume` continues from it.
-        #[arg(long, value_name = "S", value_parser = positive_seconds)]
+        /// Not with `--uncertainty`, whose levels are separate runs.
+        #[arg(long, value_name = "S", value_parser = positive_seconds, conflicts_with = "uncertainty")]
         checkpoint_s: Option<f64>,
         /// Continue the run of this directory from its checkpoint.bin (left by Ctrl-C or
         /// `--checkpoint-s`): its loads are those of an uninterrupted run, byte for byte.
