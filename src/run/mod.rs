@@ -345,6 +345,21 @@ impl Run {
             Ok(())
         })
     }
+
+    /// [`Run::save`], and tell the observer.
+    fn checkpoint(
+        &mut self,
+        case: &Case,
+        out_dir: &Path,
+        phase: Option<Real>,
+        wall_time_s: f64,
+        observer: &mut dyn Observer,
+    ) -> std::io::Result<()> {
+        let bytes = self.save(case, out_dir, phase, wall_time_s)?;
+        let path = out_dir.join(checkpoint::FILE);
+        observer.checkpoint_saved(&path, self.sim.time, self.sim.steps, bytes);
+        Ok(())
+    }
 }
 
 /// [`run_case`] with [`RunOptions`]: a lattice placement, checkpoints, a resumed start.
@@ -382,13 +397,7 @@ pub fn run_case_with(
         if observer.is_cancelled() {
             failure = Some(observer.stop_reason(run.sim.steps, run.sim.time));
             if options.checkpoint_on_stop {
-                let bytes = run.save(case, out_dir, phase, wall_time())?;
-                observer.checkpoint_saved(
-                    &out_dir.join(checkpoint::FILE),
-                    run.sim.time,
-                    run.sim.steps,
-                    bytes,
-                );
+                run.checkpoint(case, out_dir, phase, wall_time(), observer)?;
             }
             break;
         }
@@ -434,13 +443,7 @@ pub fn run_case_with(
             .checkpoint_every
             .is_some_and(|every| last_checkpoint.elapsed() >= every);
         if due && run.sim.time < end * (1.0 - 1e-12) {
-            let bytes = run.save(case, out_dir, phase, wall_time())?;
-            observer.checkpoint_saved(
-                &out_dir.join(checkpoint::FILE),
-                run.sim.time,
-                run.sim.steps,
-                bytes,
-            );
+            run.checkpoint(case, out_dir, phase, wall_time(), observer)?;
             last_checkpoint = Instant::now();
         }
     }

@@ -202,11 +202,7 @@ impl PgStore {
         .bind(attempt)
         .execute(&self.pool)
         .await;
-        match done {
-            Ok(done) => Ok(done.rows_affected() == 1),
-            Err(sqlx::Error::Database(e)) if e.is_foreign_key_violation() => Ok(false),
-            Err(e) => Err(e),
-        }
+        inserted_for_attempt(done)
     }
 
     /// The job's last checkpoint, if it has one.
@@ -265,11 +261,7 @@ impl PgStore {
         .bind(attempt)
         .execute(&self.pool)
         .await;
-        match done {
-            Ok(done) => Ok(done.rows_affected() == 1),
-            Err(sqlx::Error::Database(e)) if e.is_foreign_key_violation() => Ok(false),
-            Err(e) => Err(e),
-        }
+        inserted_for_attempt(done)
     }
 
     /// The names and sizes of a job's stored files.
@@ -388,12 +380,7 @@ impl PgStore {
         .bind(attempt)
         .execute(&self.pool)
         .await;
-        match done {
-            Ok(done) => Ok(done.rows_affected() == 1),
-            // the job was deleted between the check and the insert
-            Err(sqlx::Error::Database(e)) if e.is_foreign_key_violation() => Ok(false),
-            Err(e) => Err(e),
-        }
+        inserted_for_attempt(done)
     }
 
     /// A run file as uploaded so far (empty when nothing is).
@@ -406,5 +393,18 @@ impl PgStore {
         .fetch_all(&self.pool)
         .await?;
         Ok(chunks.into_iter().flat_map(|(c,)| c).collect())
+    }
+}
+
+/// The outcome of an insert fenced by the attempt (`WHERE EXISTS` the running attempt):
+/// `false` when the attempt no longer holds the job, or the job was deleted between
+/// the check and the insert (the foreign key).
+fn inserted_for_attempt(
+    done: Result<sqlx::postgres::PgQueryResult, sqlx::Error>,
+) -> Result<bool, sqlx::Error> {
+    match done {
+        Ok(done) => Ok(done.rows_affected() == 1),
+        Err(sqlx::Error::Database(e)) if e.is_foreign_key_violation() => Ok(false),
+        Err(e) => Err(e),
     }
 }
