@@ -44,6 +44,17 @@ pub struct BodySample {
     pub omega: Real,
 }
 
+/// A run writer's part of a checkpoint, read back ([`RunWriter::take_state`]).
+pub struct WriterState {
+    /// Next and last sample times.
+    samples: (Real, Real),
+    impulse: Vec<[Real; 3]>,
+    /// Each probe's reading and largest reading of the interval under way.
+    peaks: Option<(Vec<Real>, Vec<Real>)>,
+    /// loads, bodies, probes and energy rows so far (None: not written by the run).
+    rows: [Option<Vec<u8>>; 4],
+}
+
 /// Accumulates per-step loads into interval means and writes the CSV files.
 pub struct RunWriter {
     interval: Option<Real>,
@@ -138,38 +149,38 @@ impl RunWriter {
         Ok(())
     }
 
+    /// Read back what [`RunWriter::save_state`] wrote, touching no file.
+    pub fn take_state(r: &mut StateReader) -> Result<WriterState, StateError> {
+        Ok(WriterState {
+            samples: r.take()?,
+            impulse: r.take()?,
+            peaks: r.take()?,
+            rows: [r.take()?, r.take()?, r.take()?, r.take()?],
+        })
+    }
+
     /// Rewrite the files of `dir` as a checkpoint saved them and continue from its
     /// sampling state (this writer was created for the same case).
-    pub fn restore_state(&mut self, dir: &Path, r: &mut StateReader) -> Result<(), StateError> {
-        (self.next_sample, self.last_sample) = r.take()?;
-        let impulse: Vec<[Real; 3]> = r.take()?;
-        if impulse.len() != self.impulse.len() {
-            return Err(StateError::Mismatch(
-                "the saved walls are not the case's".into(),
-            ));
+    pub fn apply_state(&mut self, dir: &Path, saved: WriterState) -> Result<(), StateError> {
+        let mismatch =
+            |what: &str| StateError::Mismatch(format!("the saved {what} are not the case's"));
+        if saved.impulse.len() != self.impulse.len() {
+            return Err(mismatch("walls"));
         }
-        self.impulse = impulse;
-        let peaks: Option<(Vec<Real>, Vec<Real>)> = r.take()?;
-        match (&mut self.probes, peaks) {
+        (self.next_sample, self.last_sample) = saved.samples;
+        self.impulse = saved.impulse;
+        match (&mut self.probes, saved.peaks) {
             (Some(p), Some((now, max))) if now.len() == p.points.len() => {
                 (p.now, p.max) = (now, max)
             }
             (None, None) => {}
-            _ => {
-                return Err(StateError::Mismatch(
-                    "the saved probes are not the case's".into(),
-                ))
-            }
+            _ => return Err(mismatch("probes")),
         }
-        for (name, present) in self.files() {
-            let rows: Option<Vec<u8>> = r.take()?;
+        for ((name, present), rows) in self.files().into_iter().zip(saved.rows) {
             match (present, rows) {
-                (true, Some(rows)) => {
-                    let file = csv_file(&dir.join(name), &rows)?;
-                    *self.file_mut(name) = file;
-                }
+                (true, Some(rows)) => *self.file_mut(name) = csv_file(&dir.join(name), &rows)?,
                 (false, None) => {}
-                _ => return Err(StateError::Mismatch(format!("{name} is not the case's"))),
+                _ => return Err(mismatch(name)),
             }
         }
         Ok(())

@@ -168,16 +168,17 @@ impl SnapshotWriter {
 
     /// The next snapshot time and the collection so far, for a checkpoint (the `.vtu`
     /// files stay where they were written).
-    pub fn save_state(&self, w: &mut crate::state_io::StateWriter) -> std::io::Result<()> {
-        w.put(&(self.next_time, &self.entries))
+    pub fn state(&self) -> (Real, &[PvdEntry]) {
+        (self.next_time, &self.entries)
     }
 
-    pub fn restore_state(
+    /// Continue from a checkpoint's [`SnapshotWriter::state`].
+    pub fn apply_state(
         &mut self,
-        r: &mut crate::state_io::StateReader,
-    ) -> Result<(), crate::state_io::StateError> {
-        (self.next_time, self.entries) = r.take()?;
-        Ok(self.write_collection()?)
+        (next_time, entries): (Real, Vec<PvdEntry>),
+    ) -> std::io::Result<()> {
+        (self.next_time, self.entries) = (next_time, entries);
+        self.write_collection()
     }
 
     /// The collection is complete after every `record`; nothing is pending.

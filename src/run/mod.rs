@@ -7,7 +7,8 @@ use crate::coupling::Coupling;
 use crate::engine::{Attempt, SimError, Simulation, StageTimes, StepInfo};
 use crate::math::{vec2, Real};
 use crate::output::snapshots::SnapshotWriter;
-use crate::output::RunWriter;
+use crate::output::vtk::PvdEntry;
+use crate::output::{RunWriter, WriterState};
 use crate::state_io::StateError;
 use serde::{Deserialize, Serialize};
 use std::path::Path;
@@ -255,12 +256,37 @@ struct Run {
 }
 
 impl Run {
-    /// The run at t = 0, its files created (and the first snapshot written).
-    fn start(case: &Case, out_dir: &Path, phase: Option<Real>) -> std::io::Result<Self> {
-        let sim = Simulation::placed(case, phase);
-        let coupling = Coupling::new(case, &sim);
+    /// The run at t = 0, or at the checkpoint `resume` (of the same case, checked), with
+    /// its files created. The checkpoint is read to its end before any file is touched,
+    /// so a checkpoint that cannot be read leaves the run directory as it was.
+    fn start(
+        case: &Case,
+        out_dir: &Path,
+        phase: Option<Real>,
+        resume: Option<&Checkpoint>,
+    ) -> Result<Self, RunError> {
+        let mut sim = Simulation::placed(case, phase);
+        let mut coupling = Coupling::new(case, &sim);
         let probes = crate::output::probes::points(case, &sim);
-        let writer = RunWriter::create(
+        let mut extremes = (Real::INFINITY, 0.0, 0.0);
+        let mut files = None;
+        if let Some(saved) = resume {
+            if saved.header.case_json != checkpoint::case_text(case) {
+                return Err(StateError::Mismatch("it was taken of another case".into()).into());
+            }
+            let h = &saved.header;
+            extremes = (h.min_dt, h.max_dt, h.max_velocity);
+            let mut r = saved.state();
+            sim.restore_state(&mut r)?;
+            if let Some(c) = &mut coupling {
+                c.restore_state(&mut r)?;
+            }
+            let writer: WriterState = RunWriter::take_state(&mut r)?;
+            let snapshots: Option<(Real, Vec<PvdEntry>)> = r.take()?;
+            r.finish()?;
+            files = Some((writer, snapshots));
+        }
+        let mut writer = RunWriter::create(
             out_dir,
             case.output.load_interval.seconds(case.time.end),
             sim.wall_names(),
@@ -268,43 +294,38 @@ impl Run {
             probes,
             case.output.energy,
         )?;
-        let snapshots = SnapshotWriter::create(
+        let mut snapshots = SnapshotWriter::create(
             out_dir,
             case.output.snapshot_interval.seconds(case.time.end),
         )?;
+        match files {
+            None => {
+                if let Some(s) = &mut snapshots {
+                    s.record(&sim)?;
+                }
+            }
+            Some((saved, saved_snapshots)) => {
+                writer.apply_state(out_dir, saved)?;
+                match (&mut snapshots, saved_snapshots) {
+                    (Some(s), Some(state)) => s.apply_state(state)?,
+                    (None, None) => {}
+                    _ => {
+                        let e = StateError::Mismatch("the snapshots are not the case's".into());
+                        return Err(e.into());
+                    }
+                }
+            }
+        }
+        let (min_dt, max_dt, max_velocity) = extremes;
         Ok(Self {
             sim,
             coupling,
             writer,
             snapshots,
-            min_dt: Real::INFINITY,
-            max_dt: 0.0,
-            max_velocity: 0.0,
+            min_dt,
+            max_dt,
+            max_velocity,
         })
-    }
-
-    /// Replace the state at t = 0 by a checkpoint's (of the same case, checked).
-    fn restore(
-        &mut self,
-        case: &Case,
-        out_dir: &Path,
-        saved: &Checkpoint,
-    ) -> Result<(), StateError> {
-        if saved.header.case_json != checkpoint::case_text(case) {
-            return Err(StateError::Mismatch("it was taken of another case".into()));
-        }
-        let h = &saved.header;
-        (self.min_dt, self.max_dt, self.max_velocity) = (h.min_dt, h.max_dt, h.max_velocity);
-        let mut r = saved.state();
-        self.sim.restore_state(&mut r)?;
-        if let Some(c) = &mut self.coupling {
-            c.restore_state(&mut r)?;
-        }
-        self.writer.restore_state(out_dir, &mut r)?;
-        if let Some(s) = &mut self.snapshots {
-            s.restore_state(&mut r)?;
-        }
-        r.finish()
     }
 
     /// Save the state at the end of the last step to the run directory's checkpoint;
@@ -339,10 +360,7 @@ impl Run {
                 c.save_state(w)?;
             }
             writer.save_state(out_dir, w)?;
-            if let Some(s) = snapshots {
-                s.save_state(w)?;
-            }
-            Ok(())
+            w.put(&snapshots.as_ref().map(|s| s.state()))
         })
     }
 
@@ -375,19 +393,11 @@ pub fn run_case_with(
         .resume
         .as_ref()
         .map_or(options.phase, |c| c.header.phase);
-    let mut run = Run::start(case, out_dir, phase)?;
-    let wall_before = match &options.resume {
-        Some(saved) => {
-            run.restore(case, out_dir, saved)?;
-            saved.header.wall_time_s
-        }
-        None => {
-            if let Some(s) = &mut run.snapshots {
-                s.record(&run.sim)?;
-            }
-            0.0
-        }
-    };
+    let mut run = Run::start(case, out_dir, phase, options.resume.as_ref())?;
+    let wall_before = options
+        .resume
+        .as_ref()
+        .map_or(0.0, |c| c.header.wall_time_s);
     let wall_time = || wall_before + started.elapsed().as_secs_f64();
     observer.started(run.sim.particle_count(), estimate_steps(case));
     let end = case.time.end;

@@ -1,6 +1,6 @@
 //! A running job's files in the shared store (Postgres): the CSV files uploaded as
-//! they grow and the snapshots as they are written ([`SeriesUpload`]), the checkpoints
-//! a later claim resumes from ([`store_checkpoint`]), and an API node's copy of the
+//! they grow and the snapshots as they are written, and the checkpoints a later claim
+//! resumes from ([`SeriesUpload`]), and an API node's copy of the
 //! snapshots of a job whose worker's directory it cannot read ([`snapshot_dir`]).
 
 use super::series::{self, SeriesFile};
@@ -81,6 +81,39 @@ impl SeriesUpload {
             }
         }
         self.sync_snapshots(pg, id, attempt).await
+    }
+
+    /// Store a checkpoint the run saved, after what the run wrote up to it (a snapshot of
+    /// the last second is in the store before the checkpoint that lists it), with the
+    /// length each run file has at its step (a claim that resumes from it drops the rows
+    /// after); `Ok(false)` when the attempt no longer holds the job.
+    pub(super) async fn checkpoint(
+        &mut self,
+        store: &JobStore,
+        id: Uuid,
+        attempt: i64,
+        saved: Saved<'_>,
+    ) -> std::io::Result<bool> {
+        let JobStore::Postgres(pg) = store else {
+            return Ok(true);
+        };
+        if !self.sync(store, id, attempt).await? {
+            return Ok(false);
+        }
+        let data = tokio::fs::read(saved.path).await?;
+        let mut lengths = BTreeMap::new();
+        for file in UPLOADED {
+            match tokio::fs::metadata(self.dir.join(file.file)).await {
+                Ok(m) => {
+                    lengths.insert(file.file.to_string(), m.len());
+                }
+                Err(e) if e.kind() == std::io::ErrorKind::NotFound => {}
+                Err(e) => return Err(e),
+            }
+        }
+        pg.save_checkpoint(id, attempt, saved.time, saved.steps, &lengths, &data)
+            .await
+            .map_err(std::io::Error::other)
     }
 
     /// Upload the snapshot files written or grown since the last call, gzip-compressed:
@@ -179,30 +212,4 @@ pub(super) struct Saved<'a> {
     pub path: &'a Path,
     pub time: Real,
     pub steps: u64,
-}
-
-/// Store a saved checkpoint with the length each run file of `dir` has at its step (the
-/// rows after it are dropped when a claim resumes from it); `Ok(false)` when the attempt
-/// no longer holds the job.
-pub(super) async fn store_checkpoint(
-    pg: &PgStore,
-    id: Uuid,
-    attempt: i64,
-    dir: &Path,
-    saved: Saved<'_>,
-) -> std::io::Result<bool> {
-    let data = tokio::fs::read(saved.path).await?;
-    let mut lengths = BTreeMap::new();
-    for file in UPLOADED {
-        match tokio::fs::metadata(dir.join(file.file)).await {
-            Ok(m) => {
-                lengths.insert(file.file.to_string(), m.len());
-            }
-            Err(e) if e.kind() == std::io::ErrorKind::NotFound => {}
-            Err(e) => return Err(e),
-        }
-    }
-    pg.save_checkpoint(id, attempt, saved.time, saved.steps, &lengths, &data)
-        .await
-        .map_err(std::io::Error::other)
 }

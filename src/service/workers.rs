@@ -22,7 +22,7 @@
 //! renewal, which finds no job), its later writes match no row, and its worker removes the
 //! run directory when the run has stopped.
 
-use super::run_files::{store_checkpoint, Saved, SeriesUpload};
+use super::run_files::{Saved, SeriesUpload};
 use super::store::{Claimant, ClaimedJob, JobStatus, JobStore, Renewal};
 use super::Config;
 use crate::case::{parse_case_str, CaseError, ValidCase};
@@ -207,8 +207,6 @@ struct JobObserver {
     last_upload: Instant,
     /// The ladder's part running and the parts in all ((0, 1) without a ladder).
     part: (u64, u64),
-    /// The run directory (its files' lengths go with a checkpoint).
-    dir: std::path::PathBuf,
 }
 
 const PROGRESS_EVERY: Duration = Duration::from_millis(250);
@@ -269,34 +267,19 @@ impl Observer for JobObserver {
             || self.lease_lost.load(Ordering::Relaxed)
     }
 
-    /// With a shared store, the checkpoint goes there with the length each run file had
-    /// at its step, for the next claim to resume from; a cancelled job's does not.
+    /// With a shared store, the checkpoint goes there (after the files written up to
+    /// it), for the next claim to resume from; a cancelled job's does not.
     fn checkpoint_saved(&mut self, path: &std::path::Path, time: Real, steps: u64, bytes: u64) {
-        let JobStore::Postgres(pg) = &self.store else {
+        let Some(upload) = &mut self.upload else {
             return;
         };
         if self.cancel.load(Ordering::SeqCst) || self.lease_lost.load(Ordering::SeqCst) {
             return;
         }
         let started = Instant::now();
-        // what the run wrote up to the checkpoint (a snapshot of the last second) is in
-        // the store before the checkpoint that lists it
-        if let Some(upload) = &mut self.upload {
-            let synced = self
-                .runtime
-                .block_on(upload.sync(&self.store, self.id, self.attempt));
-            if let Err(e) = synced {
-                tracing::warn!(error = %e, "cannot upload the run's files");
-            }
-        }
         let saved = Saved { path, time, steps };
-        match self.runtime.block_on(store_checkpoint(
-            pg,
-            self.id,
-            self.attempt,
-            &self.dir,
-            saved,
-        )) {
+        let stored = upload.checkpoint(&self.store, self.id, self.attempt, saved);
+        match self.runtime.block_on(stored) {
             Ok(true) => tracing::info!(
                 simulated_time = time,
                 steps,
@@ -425,7 +408,6 @@ async fn execute(jobs: &Arc<Jobs>, job: ClaimedJob) -> Result<JobStatus, sqlx::E
         upload: shared.then(|| SeriesUpload::new(dir.clone())),
         last_upload: Instant::now(),
         part: (0, 1),
-        dir: dir.clone(),
     };
     // a ladder's levels are separate runs: it starts again from its first
     let saved = match &jobs.store {

@@ -7,6 +7,7 @@
 use mpsfsi::case::{load_case_file, parse_case_str, Limits, ValidCase};
 use mpsfsi::run::{checkpoint, run_case, run_case_with, Checkpoint, Observer, Progress};
 use mpsfsi::run::{Quiet, RunError, RunOptions, RunStatus};
+use std::io::{Read, Write};
 use std::path::{Path, PathBuf};
 
 /// Asks the run to stop once it has taken `at` steps.
@@ -171,13 +172,45 @@ fn a_checkpoint_of_another_case_is_refused() {
         resume: Some(saved),
         ..RunOptions::default()
     };
+    let loads = std::fs::read(dir.join("loads.csv")).unwrap();
     match run_case_with(&other, &dir, &mut Quiet, options) {
         Err(RunError::Resume(e)) => assert!(e.to_string().contains("another case"), "{e}"),
         other => panic!("expected a refusal, got {other:?}"),
     }
+    assert_eq!(
+        std::fs::read(dir.join("loads.csv")).unwrap(),
+        loads,
+        "untouched"
+    );
+
     // a damaged file is an error, not a panic
     let path = dir.join(checkpoint::FILE);
-    let mut bytes = std::fs::read(&path).unwrap();
-    bytes.truncate(bytes.len() / 2);
-    assert!(Checkpoint::from_bytes(&bytes).is_err());
+    let bytes = std::fs::read(&path).unwrap();
+    assert!(Checkpoint::from_bytes(&bytes[..bytes.len() / 2]).is_err());
+    // one whose header reads but whose state ends early is refused before the run
+    // directory is touched
+    let (tag, body) = bytes.split_at(8);
+    let mut state = Vec::new();
+    flate2::read::GzDecoder::new(body)
+        .read_to_end(&mut state)
+        .unwrap();
+    state.truncate(state.len() - 64);
+    let mut damaged = tag.to_vec();
+    let mut gz = flate2::write::GzEncoder::new(&mut damaged, flate2::Compression::fast());
+    gz.write_all(&state).unwrap();
+    gz.finish().unwrap();
+    let saved = Checkpoint::from_bytes(&damaged).expect("the header reads");
+    let options = RunOptions {
+        resume: Some(saved),
+        ..RunOptions::default()
+    };
+    match run_case_with(&case, &dir, &mut Quiet, options) {
+        Err(RunError::Resume(e)) => assert!(e.to_string().contains("damaged"), "{e}"),
+        other => panic!("expected a refusal, got {other:?}"),
+    }
+    assert_eq!(
+        std::fs::read(dir.join("loads.csv")).unwrap(),
+        loads,
+        "untouched"
+    );
 }
