@@ -40,7 +40,8 @@ pub struct Config {
     /// complete state, stored in the database); a job whose worker died resumes from the
     /// last one. 120 s: a checkpoint costs about 1.5 us per particle to write plus its
     /// upload (4.4 MB at 20 000 particles), under 1 % of the run up to 300 000
-    /// particles, and a killed worker loses at most two minutes of its job.
+    /// particles when the database takes 100 MB/s, and a killed worker loses at most
+    /// two minutes of its job.
     #[arg(long = "checkpoint-s", env = "MPSFSI_CHECKPOINT_S", default_value_t = 120.0,
           value_parser = positive_seconds)]
     pub checkpoint_s: f64,
@@ -302,7 +303,8 @@ pub struct WorkerArgs {
     /// complete state, stored in the database); a job whose worker died resumes from the
     /// last one. 120 s: a checkpoint costs about 1.5 us per particle to write plus its
     /// upload (4.4 MB at 20 000 particles), under 1 % of the run up to 300 000
-    /// particles, and a killed worker loses at most two minutes of its job.
+    /// particles when the database takes 100 MB/s, and a killed worker loses at most
+    /// two minutes of its job.
     #[arg(long = "checkpoint-s", env = "MPSFSI_CHECKPOINT_S", default_value_t = 120.0,
           value_parser = positive_seconds)]
     pub checkpoint_s: f64,
