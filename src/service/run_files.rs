@@ -135,14 +135,21 @@ impl SeriesUpload {
         };
         names.sort_by_key(|n| (n == PVD_NAME, n.clone()));
         for name in names {
+            // a file is read only when it is new or grew (this runs every second, and a
+            // job's snapshots are megabytes each)
+            let size = match tokio::fs::metadata(dir.join(&name)).await {
+                Ok(m) => m.len(),
+                Err(e) if e.kind() == std::io::ErrorKind::NotFound => continue,
+                Err(e) => return Err(e),
+            };
+            if self.snapshots.get(&name) == Some(&size) {
+                continue;
+            }
             let bytes = match tokio::fs::read(dir.join(&name)).await {
                 Ok(b) => b,
                 Err(e) if e.kind() == std::io::ErrorKind::NotFound => continue,
                 Err(e) => return Err(e),
             };
-            if self.snapshots.get(&name) == Some(&(bytes.len() as u64)) {
-                continue;
-            }
             let key = format!("{SNAPSHOT_DIR}/{name}");
             match pg.put_file(id, attempt, &key, &gzip(&bytes)?).await {
                 Ok(true) => {
@@ -178,9 +185,9 @@ pub async fn snapshot_dir(
     let JobStore::Postgres(pg) = store else {
         return Ok(local);
     };
-    let stored = pg.file_sizes(id).await?;
+    let stored = pg.file_names(id).await?;
     let dir = local.join(SNAPSHOT_DIR);
-    for (key, _) in stored {
+    for key in stored {
         let Some(name) = key.strip_prefix(&format!("{SNAPSHOT_DIR}/")) else {
             continue;
         };

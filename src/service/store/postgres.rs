@@ -264,14 +264,12 @@ impl PgStore {
         inserted_for_attempt(done)
     }
 
-    /// The names and sizes of a job's stored files.
-    pub async fn file_sizes(&self, id: Uuid) -> Result<Vec<(String, i64)>, sqlx::Error> {
-        sqlx::query_as(
-            "SELECT name, length(data)::bigint FROM job_files WHERE job_id = $1 ORDER BY name",
-        )
-        .bind(id.to_string())
-        .fetch_all(&self.pool)
-        .await
+    /// The names of a job's stored files.
+    pub async fn file_names(&self, id: Uuid) -> Result<Vec<String>, sqlx::Error> {
+        sqlx::query_scalar("SELECT name FROM job_files WHERE job_id = $1 ORDER BY name")
+            .bind(id.to_string())
+            .fetch_all(&self.pool)
+            .await
     }
 
     /// One stored file (gzip-compressed), if there is one.
