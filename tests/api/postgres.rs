@@ -98,22 +98,24 @@ async fn a_job_submitted_to_one_node_is_served_by_another_while_it_runs_and_afte
     let job = b.job(&id).await;
     assert!(partial >= 1);
     let finished = b.wait_finished(&id).await;
-    stop(worker);
     assert_eq!(finished["status"], "succeeded", "{finished}");
     assert_eq!(finished["attempts"], 1);
     assert_eq!(finished["summary"]["status"], "succeeded");
     let run_dir = finished["run_dir"].as_str().unwrap();
     assert!(run_dir.starts_with(data.to_str().unwrap()), "{run_dir}");
+    // the worker removes its directory just after it records the outcome
+    let removed = wait_until(Duration::from_secs(10), || !Path::new(run_dir).exists()).await;
+    stop(worker);
+    assert!(
+        removed,
+        "the worker removed its run directory once the store held everything"
+    );
     assert!(job["worker"].as_str().unwrap().contains(':'), "{job}");
 
     // every node serves the same complete loads: one row per 1 ms sample and object
     let (_, _, from_a) = a.get_csv(&format!("/v1/jobs/{id}/loads")).await;
     let (_, _, from_b) = b.get_csv(&format!("/v1/jobs/{id}/loads")).await;
     assert_eq!(from_a, from_b);
-    assert!(
-        !Path::new(run_dir).exists(),
-        "the worker removed its run directory once the store held everything"
-    );
     let rows = load_rows(&from_a);
     assert_eq!(rows.len(), 1000, "1 s at 1 ms, one wall");
     assert!(rows.values().all(|&n| n == 1));
@@ -587,4 +589,16 @@ async fn the_database_password_never_appears_in_logs_errors_or_the_health_route(
     assert!(log.contains("***"), "{log}");
     assert!(!log.contains(SECRET), "{log}");
     api.stop().await;
+}
+
+/// Poll `done` every 50 ms until it holds or `limit` passes; whether it held.
+async fn wait_until(limit: Duration, done: impl Fn() -> bool) -> bool {
+    let start = Instant::now();
+    while !done() {
+        if start.elapsed() > limit {
+            return false;
+        }
+        tokio::time::sleep(Duration::from_millis(50)).await;
+    }
+    true
 }
