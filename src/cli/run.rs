@@ -36,9 +36,7 @@ pub fn run(
     }
     if uncertainty {
         // every level laid out and validated before any work
-        if let Err(e) = ladder::plan(&case, ladder::RATIO, ladder::LEVELS, ladder::MEMBERS)
-            .and_then(|parts| ladder::part_cases(&case, &parts))
-        {
+        if let Err(e) = ladder::ladder(&case) {
             return report_case_error(&e);
         }
     }

@@ -135,6 +135,22 @@ pub fn part_cases(case: &ValidCase, parts: &[Part]) -> Result<Vec<ValidCase>, Ca
         .collect()
 }
 
+/// The ladder of `case`: its parts ([`plan`] at [`RATIO`], [`LEVELS`] and [`MEMBERS`])
+/// and each part's case, validated ([`part_cases`]).
+pub fn ladder(case: &ValidCase) -> Result<(Vec<Part>, Vec<ValidCase>), CaseError> {
+    let parts = plan(case, RATIO, LEVELS, MEMBERS)?;
+    let cases = part_cases(case, &parts)?;
+    Ok((parts, cases))
+}
+
+/// A ladder the case cannot be laid out at, as a run error.
+fn invalid(e: CaseError) -> RunError {
+    RunError::Io(std::io::Error::new(
+        std::io::ErrorKind::InvalidInput,
+        e.to_string(),
+    ))
+}
+
 /// Run the ladder of `case` into `out_dir` (the user's run in `out_dir` itself) and
 /// write the uncertainty outputs. The summary returned (and in summary.json) is the
 /// user's run's with `uncertainty` filled in; a part that fails or is cancelled ends
@@ -144,54 +160,89 @@ pub fn run_with_uncertainty(
     out_dir: &Path,
     observer: &mut dyn Observer,
 ) -> Result<Summary, RunError> {
-    let cases = plan(case, RATIO, LEVELS, MEMBERS).and_then(|parts| {
-        let cases = part_cases(case, &parts)?;
-        Ok((parts, cases))
-    });
-    let (parts, cases) = cases.map_err(|e| {
-        RunError::Io(std::io::Error::new(
-            std::io::ErrorKind::InvalidInput,
-            e.to_string(),
-        ))
-    })?;
+    let (parts, cases) = ladder(case).map_err(invalid)?;
     let mut summaries: Vec<Summary> = Vec::new();
     let mut dirs: Vec<PathBuf> = Vec::new();
     for (k, (part, part_case)) in parts.iter().zip(&cases).enumerate() {
-        let dir = if part.name.is_empty() {
-            out_dir.to_path_buf()
-        } else {
-            out_dir.join("levels").join(&part.name)
-        };
+        let dir = part_dir(out_dir, part);
         std::fs::create_dir_all(&dir)?;
         observer.part(k, parts.len(), &describe(part));
         let s = run_case_placed(part_case, &dir, observer, part.phase)?;
         if s.status != RunStatus::Succeeded {
-            let mut main = summaries.into_iter().next().unwrap_or_else(|| s.clone());
-            if k > 0 {
-                main.status = s.status;
-                main.reason = Some(format!(
-                    "uncertainty part {} of {} ({}) stopped: {}; the user's level completed",
-                    k + 1,
-                    parts.len(),
-                    describe(part),
-                    s.reason.as_deref().unwrap_or("no reason given")
-                ));
-                write_summary(out_dir, &main)?;
-            }
-            return Ok(main);
+            return match k {
+                0 => Ok(s),
+                _ => {
+                    let user = summaries.swap_remove(0);
+                    Ok(part_stopped(
+                        out_dir,
+                        &parts,
+                        user,
+                        k,
+                        s.status,
+                        s.reason.as_deref(),
+                    )?)
+                }
+            };
         }
         summaries.push(s);
         dirs.push(dir);
     }
+    conclude(case, out_dir, &parts, &dirs, summaries)
+}
+
+/// Where part `part` runs: `out_dir` itself for the user's level, `levels/<name>`
+/// under it for the others.
+pub fn part_dir(out_dir: &Path, part: &Part) -> PathBuf {
+    if part.name.is_empty() {
+        out_dir.to_path_buf()
+    } else {
+        out_dir.join("levels").join(&part.name)
+    }
+}
+
+/// The end of a ladder whose part `k` stopped with `status` and `reason`: the user's
+/// run's summary (`user`) with them, also written to `out_dir`'s summary.json.
+pub fn part_stopped(
+    out_dir: &Path,
+    parts: &[Part],
+    mut user: Summary,
+    k: usize,
+    status: RunStatus,
+    reason: Option<&str>,
+) -> std::io::Result<Summary> {
+    user.status = status;
+    user.reason = Some(format!(
+        "uncertainty part {} of {} ({}) stopped: {}; the user's level completed",
+        k + 1,
+        parts.len(),
+        describe(&parts[k]),
+        reason.unwrap_or("no reason given")
+    ));
+    write_summary(out_dir, &user)?;
+    Ok(user)
+}
+
+/// The end of a ladder whose parts all succeeded: the uncertainty outputs from the
+/// parts' run directories (`dirs[k]` holds part k's loads, probes and bodies), and the
+/// user's run's summary (`summaries[0]`) with `uncertainty` filled in, also written to
+/// `out_dir`'s summary.json.
+pub fn conclude(
+    case: &ValidCase,
+    out_dir: &Path,
+    parts: &[Part],
+    dirs: &[PathBuf],
+    mut summaries: Vec<Summary>,
+) -> Result<Summary, RunError> {
     let window = summaries[0].filter_window_s;
-    let mut uncertainty = combine(out_dir, &parts, &dirs, window)?;
-    uncertainty.levels = level_summaries(&parts, &summaries);
+    let mut uncertainty = combine(out_dir, parts, dirs, window)?;
+    uncertainty.levels = level_summaries(parts, &summaries);
     uncertainty.wall_time_s = summaries.iter().map(|s| s.wall_time_s).sum();
     uncertainty.cost_ratio = uncertainty.wall_time_s / summaries[0].wall_time_s.max(1e-9);
     uncertainty.particle_steps_ratio = summaries.iter().map(|s| s.particle_steps).sum::<u64>()
         as Real
         / summaries[0].particle_steps.max(1) as Real;
-    let coarsest = cases.last().expect("at least one part");
+    let coarsest = part_cases(case, &parts[parts.len() - 1..]).map_err(invalid)?;
+    let coarsest = &coarsest[0];
     uncertainty.advice = crate::analysis::envelope::impact_advice(coarsest)
         .into_iter()
         .filter(|a| !summaries[0].advice.contains(a))

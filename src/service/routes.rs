@@ -152,11 +152,13 @@ fn parse_id(id: &str) -> Result<Uuid, ApiError> {
 
 async fn find_job(state: &AppState, id: &str) -> Result<JobRow, ApiError> {
     let uuid = parse_id(id)?;
+    // a ladder's parts are rows of the store, not jobs
     state
         .jobs
         .store
         .get(uuid)
         .await?
+        .filter(|row| row.parent.is_none())
         .ok_or_else(|| ApiError::JobNotFound(id.to_string()))
 }
 
@@ -206,12 +208,17 @@ async fn submit_job(
     let case = parse_case_value(value)
         .and_then(|case| ValidCase::new(case, &config.limits()))
         .map_err(ApiError::InvalidCase)?;
-    if uncertainty {
-        // every level of the ladder laid out and validated before the job is queued
-        ladder::plan(&case, ladder::RATIO, ladder::LEVELS, ladder::MEMBERS)
-            .and_then(|parts| ladder::part_cases(&case, &parts))
-            .map_err(ApiError::InvalidCase)?;
-    }
+    // every level of the ladder laid out and validated before the job is queued; its
+    // parts are queued with it, to run on whichever workers are free
+    let ladder_parts = match uncertainty {
+        true => Some(
+            ladder::ladder(&case)
+                .map_err(ApiError::InvalidCase)?
+                .0
+                .len(),
+        ),
+        false => None,
+    };
     if state.jobs.is_stopping() {
         return Err(ApiError::ShuttingDown);
     }
@@ -232,7 +239,7 @@ async fn submit_job(
             &case.name,
             &case_text,
             case.time.end,
-            uncertainty,
+            ladder_parts,
             config.queue_capacity,
         )
         .await;
@@ -363,6 +370,8 @@ async fn cancel_job(
             status: row.status.as_str().to_string(),
         });
     }
+    // its ladder's parts end with it, whichever worker runs them
+    state.jobs.cancel_parts(row.id).await?;
     if state.jobs.store.cancel_if_queued(row.id).await? {
         let row = find_job(&state, &id).await?;
         return Ok((StatusCode::OK, Json(job_json(&row))).into_response());

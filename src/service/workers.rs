@@ -22,6 +22,8 @@
 //! renewal, which finds no job), its later writes match no row, and its worker removes the
 //! run directory when the run has stopped.
 
+mod parts;
+
 use super::run_files::{Saved, SeriesUpload};
 use super::store::{Claimant, ClaimedJob, JobStatus, JobStore, Renewal};
 use super::Config;
@@ -108,6 +110,19 @@ impl Jobs {
         self.cancel_flag(id).store(true, Ordering::SeqCst);
     }
 
+    /// End the parts of ladder job `id` with it ([`JobStore::cancel_parts`]); those a
+    /// worker of this process runs stop at their next step.
+    pub async fn cancel_parts(&self, id: Uuid) -> Result<(), sqlx::Error> {
+        let running = self.store.cancel_parts(id).await?;
+        let flags = self.cancel_flags.lock().unwrap_or_else(|p| p.into_inner());
+        for part in running {
+            if let Some(flag) = flags.get(&part) {
+                flag.store(true, Ordering::SeqCst);
+            }
+        }
+        Ok(())
+    }
+
     /// Delete job `id`: its record, what the store holds of its run, and its run
     /// directory on this node; `false` when there is no such job. A run of it stops at its
     /// next step; when this process runs it, its worker removes the run directory once the
@@ -116,6 +131,7 @@ impl Jobs {
         // raised before the record goes, so that a worker of this process that claimed
         // the job in the meantime stops too
         self.request_cancel(id);
+        self.cancel_parts(id).await?;
         let deleted = self.store.delete(id).await;
         let runs_here = matches!(&deleted, Ok(Some(row))
             if row.status == JobStatus::Running
@@ -193,7 +209,7 @@ fn worker_name() -> String {
 }
 
 /// The run observer of one job: cancel/interrupt flags and throttled progress writes.
-struct JobObserver {
+pub(super) struct JobObserver {
     id: Uuid,
     attempt: i64,
     store: JobStore,
@@ -203,10 +219,8 @@ struct JobObserver {
     lease_lost: Arc<AtomicBool>,
     last_write: Instant,
     /// With a shared store: the run's CSV files still to upload.
-    upload: Option<SeriesUpload>,
+    pub(super) upload: Option<SeriesUpload>,
     last_upload: Instant,
-    /// The ladder's part running and the parts in all ((0, 1) without a ladder).
-    part: (u64, u64),
 }
 
 const PROGRESS_EVERY: Duration = Duration::from_millis(250);
@@ -232,7 +246,6 @@ impl Observer for JobObserver {
                 self.attempt,
                 p.step,
                 p.simulated_time,
-                self.part,
             )) {
                 tracing::warn!(error = %e, "cannot record progress");
             }
@@ -250,15 +263,6 @@ impl Observer for JobObserver {
                 }
             }
         }
-    }
-
-    /// The next progress write records the new part (its first step, at once).
-    fn part(&mut self, index: usize, count: usize, label: &str) {
-        tracing::info!(part = index, parts = count, label, "ladder part");
-        self.part = (index as u64, count as u64);
-        self.last_write = Instant::now()
-            .checked_sub(PROGRESS_EVERY)
-            .unwrap_or_else(Instant::now);
     }
 
     fn is_cancelled(&self) -> bool {
@@ -356,23 +360,40 @@ pub async fn try_execute_job(jobs: &Arc<Jobs>) -> Result<ExecutionOutcome, sqlx:
     if jobs.is_stopping() {
         return Ok(ExecutionOutcome::EmptyQueue);
     }
-    let Some(job) = jobs.store.claim_next(&jobs.claimant).await? else {
+    let Some(job) = jobs.store.claim_next(&jobs.claimant, None).await? else {
         return Ok(ExecutionOutcome::EmptyQueue);
     };
+    let id = job.row.id;
+    Ok(ExecutionOutcome::JobFinished(
+        id,
+        run_claimed(jobs, job).await?,
+    ))
+}
+
+/// Run a claimed job (or a ladder's part) and record its end.
+pub(super) async fn run_claimed(
+    jobs: &Arc<Jobs>,
+    job: ClaimedJob,
+) -> Result<JobStatus, sqlx::Error> {
     let id = job.row.id;
     let span = tracing::info_span!("job", %id, name = %job.row.name);
     jobs.running.fetch_add(1, Ordering::SeqCst);
     let status = execute(jobs, job).instrument(span).await;
     jobs.running.fetch_sub(1, Ordering::SeqCst);
     jobs.forget_cancel_flag(id);
-    Ok(ExecutionOutcome::JobFinished(id, status?))
+    status
 }
 
 async fn execute(jobs: &Arc<Jobs>, job: ClaimedJob) -> Result<JobStatus, sqlx::Error> {
     let id = job.row.id;
     let attempt = job.attempt();
     let shared = jobs.store.is_shared();
-    let dir = jobs.config.job_dir(&id);
+    // a part runs in its job's directory (`levels/<name>`) on the one node SQLite has
+    let dir = match (shared, job.row.parent) {
+        (false, Some(parent)) => jobs.config.job_dir(&parent),
+        _ => jobs.config.job_dir(&id),
+    };
+    let (row, case_json) = (job.row.clone(), job.case_json.clone());
     if shared {
         // this worker may hold an earlier attempt's files; the case comes from the store
         let _ = tokio::fs::remove_dir_all(&dir).await;
@@ -407,11 +428,9 @@ async fn execute(jobs: &Arc<Jobs>, job: ClaimedJob) -> Result<JobStatus, sqlx::E
         last_write: Instant::now(),
         upload: shared.then(|| SeriesUpload::new(dir.clone())),
         last_upload: Instant::now(),
-        part: (0, 1),
     };
-    // a ladder's levels are separate runs: it starts again from its first
     let saved = match &jobs.store {
-        JobStore::Postgres(pg) if !job.row.uncertainty => pg.checkpoint(id).await?,
+        JobStore::Postgres(pg) => pg.checkpoint(id).await?,
         _ => None,
     };
     let checkpoint_every = Duration::from_secs_f64(jobs.config.checkpoint_s);
@@ -424,9 +443,12 @@ async fn execute(jobs: &Arc<Jobs>, job: ClaimedJob) -> Result<JobStatus, sqlx::E
         let dir = run_dir;
         // this service's limits, which may differ from those the job was submitted under
         let case = ValidCase::new(parse_case_str(&job.case_json)?, &limits)?;
-        let run = if job.row.uncertainty {
-            crate::run::uncertainty::run_with_uncertainty(&case, &dir, &mut observer)
-        } else {
+        // a ladder job runs the user's level, its parts the others
+        let (case, dir, phase) = match job.row.parent {
+            Some(_) => parts::part_case(&case, job.row.part, dir, shared)?,
+            None => (case, dir, None),
+        };
+        let run = {
             let resume = saved.and_then(|bytes| match Checkpoint::from_bytes(&bytes) {
                 Ok(saved) => {
                     tracing::info!(
@@ -449,18 +471,24 @@ async fn execute(jobs: &Arc<Jobs>, job: ClaimedJob) -> Result<JobStatus, sqlx::E
                 }
             });
             let options = RunOptions {
+                phase,
                 checkpoint_every: shared.then_some(checkpoint_every),
                 checkpoint_on_stop: shared,
                 resume,
-                ..RunOptions::default()
             };
             run_case_with(&case, &dir, &mut observer, options)
         };
-        Ok((run, observer.upload))
+        Ok((run, observer))
     })
     .await;
     let (outcome, upload) = match outcome {
-        Ok(Ok((run, upload))) => (Ok(Ok(run)), upload),
+        Ok(Ok((Ok(user), observer))) if row.uncertainty && user.status == RunStatus::Succeeded => {
+            // the user's level ran: the job ends with its parts
+            let ladder =
+                parts::finish_ladder(jobs, &row, &case_json, &dir, user, &observer).await?;
+            (Ok(Ok(Ok(ladder))), observer.upload)
+        }
+        Ok(Ok((run, observer))) => (Ok(Ok(run)), observer.upload),
         Ok(Err(e)) => (Ok(Err(e)), None),
         Err(join) => (Err(join), None),
     };
@@ -557,6 +585,14 @@ async fn execute(jobs: &Arc<Jobs>, job: ClaimedJob) -> Result<JobStatus, sqlx::E
         .await?;
     if !recorded && !jobs.removed_if_deleted(id, &dir).await {
         tracing::warn!("another attempt holds the job: this outcome is discarded");
+    }
+    match (recorded, row.parent) {
+        (true, Some(parent)) => jobs.store.part_ended(parent).await?,
+        // a ladder job that did not succeed takes its parts with it
+        (true, None) if row.uncertainty && status != JobStatus::Succeeded => {
+            jobs.cancel_parts(id).await?
+        }
+        _ => {}
     }
     if let (true, JobStore::Postgres(pg)) = (recorded, &jobs.store) {
         pg.drop_checkpoint(id).await?;

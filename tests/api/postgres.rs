@@ -279,7 +279,7 @@ async fn a_job_whose_worker_dies_every_time_fails_with_attempts_exhausted() {
     let id = uuid::Uuid::new_v4();
     let case = serde_json::to_string(&tiny_case(0.01)).unwrap();
     store
-        .submit(id, "tiny-tank", &case, 0.01, false, 10)
+        .submit(id, "tiny-tank", &case, 0.01, None, 10)
         .await
         .unwrap();
     // a claimant that never renews: its lease runs out as a killed worker's would
@@ -289,15 +289,19 @@ async fn a_job_whose_worker_dies_every_time_fails_with_attempts_exhausted() {
         lease_s: 0.3,
         max_attempts: 2,
     };
-    let first = store.claim_next(&dies).await.unwrap().expect("claimed");
+    let first = store
+        .claim_next(&dies, None)
+        .await
+        .unwrap()
+        .expect("claimed");
     assert_eq!(first.attempt(), 1);
     assert!(
-        store.claim_next(&dies).await.unwrap().is_none(),
+        store.claim_next(&dies, None).await.unwrap().is_none(),
         "the lease still holds"
     );
     tokio::time::sleep(Duration::from_millis(500)).await;
     let second = store
-        .claim_next(&dies)
+        .claim_next(&dies, None)
         .await
         .unwrap()
         .expect("claimed again");
@@ -309,7 +313,7 @@ async fn a_job_whose_worker_dies_every_time_fails_with_attempts_exhausted() {
         .unwrap();
     assert!(!late, "a stale attempt recorded its outcome");
     tokio::time::sleep(Duration::from_millis(500)).await;
-    assert!(store.claim_next(&dies).await.unwrap().is_none());
+    assert!(store.claim_next(&dies, None).await.unwrap().is_none());
     let row = store.get(id).await.unwrap().unwrap();
     assert_eq!(row.status, JobStatus::Failed);
     assert_eq!(row.reason.as_deref(), Some(ATTEMPTS_EXHAUSTED));

@@ -58,10 +58,7 @@ async fn queued_and_running(url: &str) -> (String, String) {
     for name in ["running", "queued"] {
         let id = Uuid::new_v4();
         let case = format!("{{\"name\": \"{name}\"}}");
-        let admitted = store
-            .submit(id, name, &case, 1.0, false, 100)
-            .await
-            .unwrap();
+        let admitted = store.submit(id, name, &case, 1.0, None, 100).await.unwrap();
         assert!(matches!(admitted, Admission::Accepted(_)));
         if name == "running" {
             let claimant = Claimant {
@@ -70,7 +67,7 @@ async fn queued_and_running(url: &str) -> (String, String) {
                 lease_s: 3600.0,
                 max_attempts: 3,
             };
-            let claimed = store.claim_next(&claimant).await.unwrap().unwrap();
+            let claimed = store.claim_next(&claimant, None).await.unwrap().unwrap();
             assert_eq!(claimed.row.id, id);
         }
         ids.push(id.to_string());

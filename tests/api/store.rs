@@ -84,7 +84,7 @@ fn case_of(name: &str) -> String {
 
 async fn try_submit(store: &JobStore, name: &str, capacity: usize) -> Option<JobRow> {
     match store
-        .submit(Uuid::new_v4(), name, &case_of(name), 0.5, false, capacity)
+        .submit(Uuid::new_v4(), name, &case_of(name), 0.5, None, capacity)
         .await
         .expect("submit")
     {
@@ -102,7 +102,7 @@ async fn submit(store: &JobStore, name: &str) -> Uuid {
 
 async fn claim(store: &JobStore) -> ClaimedJob {
     store
-        .claim_next(&claimant())
+        .claim_next(&claimant(), None)
         .await
         .expect("claim")
         .expect("a job to claim")
@@ -167,7 +167,7 @@ async fn submit_admits_jobs_up_to_the_queue_capacity(store: &JobStore) {
 }
 
 async fn claim_takes_the_oldest_queued_job(store: &JobStore) {
-    assert!(store.claim_next(&claimant()).await.unwrap().is_none());
+    assert!(store.claim_next(&claimant(), None).await.unwrap().is_none());
     let a = submit(store, "a").await;
     let b = submit(store, "b").await;
     let c = submit(store, "c").await;
@@ -190,7 +190,7 @@ async fn claim_takes_the_oldest_queued_job(store: &JobStore) {
     assert_eq!(next.row.id, c, "a cancelled job is not claimed");
     assert_eq!(next.case_json, case_of("c"));
     assert!(
-        store.claim_next(&claimant()).await.unwrap().is_none(),
+        store.claim_next(&claimant(), None).await.unwrap().is_none(),
         "running jobs are not claimed again"
     );
 }
@@ -200,10 +200,7 @@ async fn progress_is_written_only_by_the_attempt_holding_the_job(store: &JobStor
     let attempt = claim(store).await.attempt();
 
     store.set_started(id, attempt, 1200).await.unwrap();
-    store
-        .set_progress(id, attempt, 40, 0.125, (0, 1))
-        .await
-        .unwrap();
+    store.set_progress(id, attempt, 40, 0.125).await.unwrap();
     let held = row(store, id).await;
     assert_eq!(held.particles, Some(1200));
     assert_eq!((held.step, held.simulated_time), (40, 0.125));
@@ -211,10 +208,7 @@ async fn progress_is_written_only_by_the_attempt_holding_the_job(store: &JobStor
     // another attempt's writes change nothing
     for other in [attempt - 1, attempt + 1] {
         store.set_started(id, other, 7).await.unwrap();
-        store
-            .set_progress(id, other, 99, 0.4, (0, 1))
-            .await
-            .unwrap();
+        store.set_progress(id, other, 99, 0.4).await.unwrap();
     }
     let fenced = row(store, id).await;
     assert_eq!(fenced.particles, Some(1200));
@@ -234,10 +228,7 @@ async fn progress_is_written_only_by_the_attempt_holding_the_job(store: &JobStor
         .await
         .unwrap());
     store.set_started(id, attempt, 7).await.unwrap();
-    store
-        .set_progress(id, attempt, 99, 0.4, (0, 1))
-        .await
-        .unwrap();
+    store.set_progress(id, attempt, 99, 0.4).await.unwrap();
     let ended = row(store, id).await;
     assert_eq!(ended.particles, Some(1200));
     assert_eq!((ended.step, ended.simulated_time), (41, 0.13));
@@ -403,10 +394,7 @@ async fn case_text_is_the_submitted_text(store: &JobStore) {
     let text =
         "{ \"name\":  \"ke\u{00ef}l\u{2014}w\u{00e9}dge\",\n  \"b\": 1,\n  \"a\": [0.5e-3]\n}\n";
     let id = Uuid::new_v4();
-    let admitted = store
-        .submit(id, "keel", text, 0.5, false, 10)
-        .await
-        .unwrap();
+    let admitted = store.submit(id, "keel", text, 0.5, None, 10).await.unwrap();
     assert!(matches!(admitted, Admission::Accepted(_)));
     assert_eq!(store.case_text(id).await.unwrap().as_deref(), Some(text));
     assert_eq!(claim(store).await.case_json, text);
@@ -422,7 +410,7 @@ async fn delete_removes_the_job_and_its_rows_and_no_other_job_s(store: &JobStore
     let kept_attempt = claim(store).await.attempt();
     let gone_attempt = claim(store).await.attempt();
     store
-        .set_progress(gone, gone_attempt, 10, 0.01, (0, 1))
+        .set_progress(gone, gone_attempt, 10, 0.01)
         .await
         .unwrap();
     if let JobStore::Postgres(pg) = store {
@@ -448,7 +436,7 @@ async fn delete_removes_the_job_and_its_rows_and_no_other_job_s(store: &JobStore
     // the worker still running it writes nothing and brings nothing back
     store.set_started(gone, gone_attempt, 7).await.unwrap();
     store
-        .set_progress(gone, gone_attempt, 20, 0.02, (0, 1))
+        .set_progress(gone, gone_attempt, 20, 0.02)
         .await
         .unwrap();
     assert!(!late_success(store, gone, gone_attempt).await);
@@ -481,7 +469,7 @@ async fn delete_removes_the_job_and_its_rows_and_no_other_job_s(store: &JobStore
         store.get(gone).await.unwrap().is_none(),
         "nothing reappears"
     );
-    assert!(store.claim_next(&claimant()).await.unwrap().is_none());
+    assert!(store.claim_next(&claimant(), None).await.unwrap().is_none());
 
     // the other job is untouched
     let (rows, total) = store.list(None, 10, 0).await.unwrap();

@@ -36,9 +36,9 @@ async fn a_job_with_uncertainty_serves_the_half_widths() {
     assert_conforms("GET", "/v1/jobs/{id}", 200, &job);
     let levels = job["summary"]["uncertainty"]["levels"].as_array().unwrap();
     assert_eq!(levels.len(), 4, "{job:#}");
-    // the progress counted the ladder's seven parts
+    // the progress counted the ladder's seven parts, all ended
     assert_eq!(job["progress"]["parts"], 7, "{job:#}");
-    assert_eq!(job["progress"]["part"], 6, "{job:#}");
+    assert_eq!(job["progress"]["part"], 7, "{job:#}");
 
     let (status, content_type, csv) = app
         .get_csv(&format!("/v1/jobs/{id}/loads_uncertainty"))

@@ -68,9 +68,13 @@ pub struct JobRow {
     pub run_dir: Option<String>,
     /// Submitted with `?uncertainty=true`: the run is the resolution ladder.
     pub uncertainty: bool,
-    /// The part of the ladder running (from 0) and the parts in all (1 without a ladder).
+    /// A ladder's parts in all (1 without a ladder) and, on the job's row, how many of
+    /// its coarser parts have ended (all of them once the job succeeded).
     pub part: i64,
     pub parts: i64,
+    /// On a part's row: the job it belongs to (its `part` is then its index in the
+    /// ladder). Parts run as jobs but are never listed or served.
+    pub parent: Option<Uuid>,
     /// The simulated time the current attempt resumed from (a checkpoint), or `None`
     /// from t = 0.
     pub resumed_from: Option<f64>,
@@ -78,7 +82,14 @@ pub struct JobRow {
 
 /// The columns of [`JobRow`], in the order of [`RawJob`].
 pub(super) const COLUMNS: &str = "id, name, status, created_at, started_at, finished_at, step, \
-     simulated_time, end_time, particles, reason, summary, attempts, worker, run_dir, uncertainty, part, parts, resumed_from";
+     simulated_time, end_time, particles, reason, summary, attempts, worker, run_dir, uncertainty, part, parts, resumed_from, parent";
+
+/// The condition a claimable row meets besides its status, in a claim whose fourth
+/// parameter is `parts_of` (a job's id, or null): a job, or a part whose job has not
+/// ended; with `parts_of`, only that job's parts.
+pub(super) const CLAIMABLE: &str = "(CAST($4 AS TEXT) IS NULL OR jobs.parent = $4)
+     AND (jobs.parent IS NULL OR EXISTS (SELECT 1 FROM jobs AS owner
+          WHERE owner.id = jobs.parent AND owner.status IN ('queued', 'running')))";
 
 /// A row as both databases return it (text ids and statuses); [`RawJob::into_row`]
 /// checks them.
@@ -103,6 +114,12 @@ pub(super) struct RawJob {
     part: i64,
     parts: i64,
     resumed_from: Option<f64>,
+    parent: Option<String>,
+}
+
+/// A stored id as a [`Uuid`].
+pub(super) fn parse_uuid(id: &str) -> Result<Uuid, sqlx::Error> {
+    Uuid::parse_str(id).map_err(|e| sqlx::Error::Decode(Box::new(e)))
 }
 
 impl RawJob {
@@ -111,7 +128,7 @@ impl RawJob {
             sqlx::Error::Decode(format!("unknown job status {:?}", self.status).into())
         })?;
         Ok(JobRow {
-            id: Uuid::parse_str(&self.id).map_err(|e| sqlx::Error::Decode(Box::new(e)))?,
+            id: parse_uuid(&self.id)?,
             name: self.name,
             status,
             created_at: self.created_at,
@@ -130,6 +147,7 @@ impl RawJob {
             part: self.part,
             parts: self.parts,
             resumed_from: self.resumed_from,
+            parent: self.parent.as_deref().map(parse_uuid).transpose()?,
         })
     }
 }

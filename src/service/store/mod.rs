@@ -37,7 +37,7 @@ pub use job::{
 pub use postgres::{PgStore, QUEUE_CHANNEL};
 pub use sqlite::SqliteStore;
 
-use job::{RawJob, COLUMNS};
+use job::{parse_uuid, RawJob, COLUMNS};
 use uuid::Uuid;
 
 #[derive(Debug, Clone)]
@@ -93,45 +93,73 @@ impl JobStore {
         }
     }
 
-    /// Insert a queued job unless `capacity` jobs are already queued.
+    /// Insert a queued job unless `capacity` jobs are already queued. A ladder
+    /// (`ladder_parts`: `Some(n)`, from `?uncertainty=true`) also queues its coarser parts
+    /// 1 to n - 1, as rows whose `parent` is the job, in the same transaction: the job's
+    /// own row runs part 0, the user's level. Parts do not count against the capacity.
     pub async fn submit(
         &self,
         id: Uuid,
         name: &str,
         case_json: &str,
         end_time: f64,
-        uncertainty: bool,
+        ladder_parts: Option<usize>,
         capacity: usize,
     ) -> Result<Admission, sqlx::Error> {
         // one statement, so that concurrent submissions to a SQLite file cannot overfill
         // the queue; Postgres also runs it under its submission lock, because there two
         // statements at once count the queue without each other's insert
         let sql = format!(
-            "INSERT INTO jobs (id, name, status, case_json, created_at, end_time, uncertainty)
-             SELECT $1, $2, 'queued', $3, $4, $5, $6
-             WHERE (SELECT COUNT(*) FROM jobs WHERE status = 'queued') < $7
+            "INSERT INTO jobs (id, name, status, case_json, created_at, end_time, uncertainty, parts)
+             SELECT $1, $2, 'queued', $3, $4, $5, $6, $7
+             WHERE (SELECT COUNT(*) FROM jobs WHERE status = 'queued' AND parent IS NULL) < $8
              RETURNING {COLUMNS}"
         );
+        let part_sql = "INSERT INTO jobs (id, name, status, case_json, created_at, end_time, parent, part, parts)
+             VALUES ($1, $2, 'queued', $3, $4, $5, $6, $7, $8)";
+        let parts = ladder_parts.unwrap_or(1).max(1) as i64;
         let (id, now, capacity) = (id.to_string(), now_rfc3339(), capacity as i64);
         macro_rules! insert_on {
-            ($executor:expr) => {
-                sqlx::query_as::<_, RawJob>(&sql)
+            ($tx:expr) => {{
+                let row: Option<RawJob> = sqlx::query_as(&sql)
                     .bind(&id)
                     .bind(name)
                     .bind(case_json)
                     .bind(&now)
                     .bind(end_time)
-                    .bind(uncertainty)
+                    .bind(ladder_parts.is_some())
+                    .bind(parts)
                     .bind(capacity)
-                    .fetch_optional($executor)
-                    .await?
-            };
+                    .fetch_optional(&mut *$tx)
+                    .await?;
+                if row.is_some() {
+                    for part in 1..parts {
+                        sqlx::query(part_sql)
+                            .bind(Uuid::new_v4().to_string())
+                            .bind(format!("{name} (part {part} of {parts})"))
+                            .bind(case_json)
+                            .bind(&now)
+                            .bind(end_time)
+                            .bind(&id)
+                            .bind(part)
+                            .bind(parts)
+                            .execute(&mut *$tx)
+                            .await?;
+                    }
+                }
+                row
+            }};
         }
         let row = match self {
-            Self::Sqlite(s) => insert_on!(&s.pool),
+            Self::Sqlite(s) => {
+                let mut tx = s.pool.begin().await?;
+                let row = insert_on!(tx);
+                tx.commit().await?;
+                row
+            }
             Self::Postgres(s) => {
                 let mut tx = s.lock_submissions().await?;
-                let row = insert_on!(&mut *tx);
+                let row = insert_on!(tx);
                 if row.is_some() {
                     PgStore::announce_queued(&mut *tx).await?;
                 }
@@ -145,9 +173,15 @@ impl JobStore {
         })
     }
 
-    /// Claim the oldest waiting job (marks it `running`, counts the attempt).
-    pub async fn claim_next(&self, by: &Claimant) -> Result<Option<ClaimedJob>, sqlx::Error> {
-        either!(self, s => s.claim_next(by).await)
+    /// Claim the oldest waiting job (marks it `running`, counts the attempt); with
+    /// `parts_of`, only a part of that job. A part whose job has ended is not claimed.
+    pub async fn claim_next(
+        &self,
+        by: &Claimant,
+        parts_of: Option<Uuid>,
+    ) -> Result<Option<ClaimedJob>, sqlx::Error> {
+        let parts_of = parts_of.map(|id| id.to_string());
+        either!(self, s => s.claim_next(by, parts_of.as_deref()).await)
     }
 
     pub async fn get(&self, id: Uuid) -> Result<Option<JobRow>, sqlx::Error> {
@@ -186,10 +220,11 @@ impl JobStore {
     ) -> Result<(Vec<JobRow>, i64), sqlx::Error> {
         let filter = status.map(JobStatus::as_str);
         let page = format!(
-            "SELECT {COLUMNS} FROM jobs WHERE ($1 IS NULL OR status = $1)
+            "SELECT {COLUMNS} FROM jobs WHERE ($1 IS NULL OR status = $1) AND parent IS NULL
              ORDER BY seq DESC LIMIT $2 OFFSET $3"
         );
-        let count = "SELECT COUNT(*) FROM jobs WHERE ($1 IS NULL OR status = $1)";
+        let count =
+            "SELECT COUNT(*) FROM jobs WHERE ($1 IS NULL OR status = $1) AND parent IS NULL";
         let (rows, total): (Vec<RawJob>, i64) = either!(self, s => {
             let rows = sqlx::query_as(&page)
                 .bind(filter)
@@ -226,14 +261,76 @@ impl JobStore {
         Ok(done == 1)
     }
 
+    /// End the parts of ladder job `parent` with it: queued parts are cancelled, running
+    /// ones asked to stop (Postgres: flagged for their workers, wherever they run). The
+    /// running parts' ids, for the flags of this process's workers.
+    pub async fn cancel_parts(&self, parent: Uuid) -> Result<Vec<Uuid>, sqlx::Error> {
+        let queued = "UPDATE jobs SET status = 'cancelled', reason = 'its job ended',
+                 finished_at = $1
+             WHERE parent = $2 AND status = 'queued'";
+        let running = "UPDATE jobs SET cancel_requested = TRUE
+             WHERE parent = $1 AND status = 'running' RETURNING id";
+        let parent = parent.to_string();
+        let ids: Vec<String> = match self {
+            Self::Sqlite(s) => {
+                sqlx::query(queued)
+                    .bind(now_rfc3339())
+                    .bind(&parent)
+                    .execute(&s.pool)
+                    .await?;
+                let sql = "SELECT id FROM jobs WHERE parent = $1 AND status = 'running'";
+                sqlx::query_scalar(sql)
+                    .bind(&parent)
+                    .fetch_all(&s.pool)
+                    .await?
+            }
+            Self::Postgres(s) => {
+                sqlx::query(queued)
+                    .bind(now_rfc3339())
+                    .bind(&parent)
+                    .execute(&s.pool)
+                    .await?;
+                sqlx::query_scalar(running)
+                    .bind(&parent)
+                    .fetch_all(&s.pool)
+                    .await?
+            }
+        };
+        ids.iter().map(|id| parse_uuid(id)).collect()
+    }
+
+    /// The parts of ladder job `parent`, in the ladder's order.
+    pub async fn parts(&self, parent: Uuid) -> Result<Vec<JobRow>, sqlx::Error> {
+        let sql = format!("SELECT {COLUMNS} FROM jobs WHERE parent = $1 ORDER BY part");
+        let raw: Vec<RawJob> = either!(self, s => {
+            sqlx::query_as(&sql)
+                .bind(parent.to_string())
+                .fetch_all(&s.pool)
+                .await?
+        });
+        raw.into_iter().map(RawJob::into_row).collect()
+    }
+
+    /// Count one more ended part on the row of ladder job `parent` (its progress).
+    pub async fn part_ended(&self, parent: Uuid) -> Result<(), sqlx::Error> {
+        let sql = "UPDATE jobs SET part = part + 1 WHERE id = $1 AND part + 1 < parts";
+        either!(self, s => {
+            sqlx::query(sql)
+                .bind(parent.to_string())
+                .execute(&s.pool)
+                .await?;
+        });
+        Ok(())
+    }
+
     /// Remove job `id` and everything stored with it (Postgres: its uploaded run files,
-    /// by the `ON DELETE CASCADE` of `job_series`); the record as it was, `None` when
-    /// there is no such job. A worker still running it can no longer write: its writes
+    /// by the `ON DELETE CASCADE` of `job_series`; its ladder's parts, by that of
+    /// `parent`); the record as it was, `None` when there is no such job. A worker still running it can no longer write: its writes
     /// match no row (`finish` returns `false`, [`PgStore::append_series`] and `renew`
     /// report the claim lost), so nothing of the job reappears.
     pub async fn delete(&self, id: Uuid) -> Result<Option<JobRow>, sqlx::Error> {
         self.one_job(
-            &format!("DELETE FROM jobs WHERE id = $1 RETURNING {COLUMNS}"),
+            &format!("DELETE FROM jobs WHERE id = $1 AND parent IS NULL RETURNING {COLUMNS}"),
             id,
         )
         .await
@@ -244,13 +341,12 @@ impl JobStore {
     pub async fn finished_before(&self, cutoff: &str) -> Result<Vec<Uuid>, sqlx::Error> {
         let sql = "SELECT id FROM jobs
              WHERE status IN ('succeeded', 'failed', 'cancelled') AND finished_at < $1
+               AND parent IS NULL
              ORDER BY finished_at";
         let ids: Vec<String> = either!(self, s => {
             sqlx::query_scalar(sql).bind(cutoff).fetch_all(&s.pool).await?
         });
-        ids.iter()
-            .map(|id| Uuid::parse_str(id).map_err(|e| sqlx::Error::Decode(Box::new(e))))
-            .collect()
+        ids.iter().map(|id| parse_uuid(id)).collect()
     }
 
     /// Postgres: flag a running job for its worker, wherever it runs. SQLite: nothing
@@ -310,16 +406,13 @@ impl JobStore {
         attempt: i64,
         step: u64,
         simulated_time: f64,
-        part: (u64, u64),
     ) -> Result<(), sqlx::Error> {
-        let sql = "UPDATE jobs SET step = $1, simulated_time = $2, part = $3, parts = $4
-             WHERE id = $5 AND attempts = $6 AND status = 'running'";
+        let sql = "UPDATE jobs SET step = $1, simulated_time = $2
+             WHERE id = $3 AND attempts = $4 AND status = 'running'";
         either!(self, s => {
             sqlx::query(sql)
                 .bind(step as i64)
                 .bind(simulated_time)
-                .bind(part.0 as i64)
-                .bind(part.1 as i64)
                 .bind(id.to_string())
                 .bind(attempt)
                 .execute(&s.pool)
@@ -342,8 +435,10 @@ impl JobStore {
         step: u64,
         simulated_time: f64,
     ) -> Result<bool, sqlx::Error> {
+        // a ladder job that succeeded has all its parts ended
         let sql = "UPDATE jobs SET status = $1, reason = $2, summary = $3, finished_at = $4,
-                 step = $5, simulated_time = $6
+                 step = $5, simulated_time = $6,
+                 part = CASE WHEN $1 = 'succeeded' AND parent IS NULL THEN parts ELSE part END
              WHERE id = $7 AND attempts = $8 AND status = 'running'";
         let done = either!(self, s => {
             sqlx::query(sql)

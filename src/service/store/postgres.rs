@@ -9,7 +9,7 @@
 //! `lease_until` as it was, since a lease is read only while its job is `running`.
 
 use super::job::{
-    now_rfc3339, Claimant, ClaimedJob, RawClaim, Renewal, ATTEMPTS_EXHAUSTED, COLUMNS,
+    now_rfc3339, Claimant, ClaimedJob, RawClaim, Renewal, ATTEMPTS_EXHAUSTED, CLAIMABLE, COLUMNS,
 };
 use sqlx::postgres::{PgListener, PgPool, PgPoolOptions, Postgres};
 use sqlx::Transaction;
@@ -79,7 +79,11 @@ impl PgStore {
     /// End the jobs whose lease expired and that must not run again (cancel requested,
     /// or `max_attempts` claims spent), then claim the oldest queued or expired job and
     /// discard what an earlier attempt uploaded.
-    pub async fn claim_next(&self, by: &Claimant) -> Result<Option<ClaimedJob>, sqlx::Error> {
+    pub async fn claim_next(
+        &self,
+        by: &Claimant,
+        parts_of: Option<&str>,
+    ) -> Result<Option<ClaimedJob>, sqlx::Error> {
         let mut tx = self.pool.begin().await?;
         sqlx::query(&format!(
             "UPDATE jobs SET
@@ -96,11 +100,12 @@ impl PgStore {
         let claimed: Option<RawClaim> = sqlx::query_as(&format!(
             "WITH next AS (
                  SELECT seq FROM jobs
-                 WHERE status = 'queued' OR (status = 'running' AND lease_until < now())
-                 ORDER BY seq LIMIT 1 FOR UPDATE SKIP LOCKED)
+                 WHERE (status = 'queued' OR (status = 'running' AND lease_until < now()))
+                   AND {CLAIMABLE}
+                 ORDER BY seq LIMIT 1 FOR UPDATE OF jobs SKIP LOCKED)
              UPDATE jobs SET status = 'running', started_at = $1, attempts = jobs.attempts + 1,
                  worker = $2, run_dir = $3 || jobs.id,
-                 lease_until = now() + make_interval(secs => $4),
+                 lease_until = now() + make_interval(secs => $5),
                  step = COALESCE((SELECT c.step FROM job_checkpoints c WHERE c.job_id = jobs.id), 0),
                  simulated_time = COALESCE(
                      (SELECT c.simulated_time FROM job_checkpoints c WHERE c.job_id = jobs.id), 0),
@@ -112,6 +117,7 @@ impl PgStore {
         .bind(now_rfc3339())
         .bind(&by.worker)
         .bind(&by.jobs_dir)
+        .bind(parts_of)
         .bind(by.lease_s)
         .fetch_optional(&mut *tx)
         .await?;

@@ -3,7 +3,7 @@
 //! the previous process ([`SqliteStore::recover_interrupted`]). The queries both stores
 //! share are in [`super::JobStore`].
 
-use super::job::{now_rfc3339, Claimant, ClaimedJob, RawClaim, COLUMNS};
+use super::job::{now_rfc3339, Claimant, ClaimedJob, RawClaim, CLAIMABLE, COLUMNS};
 use sqlx::sqlite::{
     SqliteConnectOptions, SqliteJournalMode, SqlitePool, SqlitePoolOptions, SqliteSynchronous,
 };
@@ -44,16 +44,22 @@ impl SqliteStore {
     }
 
     /// One statement: this process's workers are the only claimants.
-    pub async fn claim_next(&self, by: &Claimant) -> Result<Option<ClaimedJob>, sqlx::Error> {
+    pub async fn claim_next(
+        &self,
+        by: &Claimant,
+        parts_of: Option<&str>,
+    ) -> Result<Option<ClaimedJob>, sqlx::Error> {
         let claimed: Option<RawClaim> = sqlx::query_as(&format!(
             "UPDATE jobs SET status = 'running', started_at = $1, attempts = attempts + 1,
                  worker = $2, run_dir = $3 || id
-             WHERE seq = (SELECT seq FROM jobs WHERE status = 'queued' ORDER BY seq LIMIT 1)
+             WHERE seq = (SELECT seq FROM jobs WHERE status = 'queued' AND {CLAIMABLE}
+                          ORDER BY seq LIMIT 1)
              RETURNING {COLUMNS}, case_json"
         ))
         .bind(now_rfc3339())
         .bind(&by.worker)
         .bind(&by.jobs_dir)
+        .bind(parts_of)
         .fetch_optional(&self.pool)
         .await?;
         claimed.map(RawClaim::into_claimed).transpose()
