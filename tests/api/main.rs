@@ -12,6 +12,7 @@ mod devtools;
 mod helpers;
 mod limits;
 mod page;
+mod parts;
 mod pg_server;
 mod postgres;
 mod restart;
