@@ -128,6 +128,12 @@ impl Jobs {
     /// next step; when this process runs it, its worker removes the run directory once the
     /// run has stopped (it may still be writing there until then).
     pub async fn delete(&self, id: Uuid) -> Result<bool, sqlx::Error> {
+        // a ladder's part is not a job: it goes with its job only
+        if let Some(row) = self.store.get(id).await? {
+            if row.parent.is_some() {
+                return Ok(false);
+            }
+        }
         // raised before the record goes, so that a worker of this process that claimed
         // the job in the meantime stops too
         self.request_cancel(id);

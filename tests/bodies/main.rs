@@ -4,6 +4,7 @@
 
 mod acceleration_reaction;
 mod apex;
+mod circle;
 mod common;
 mod coupling;
 mod hydrostatics;
