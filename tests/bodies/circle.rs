@@ -45,7 +45,10 @@ fn a_circle_s_slamming_coefficient_lies_between_von_karman_and_wagner() {
         .collect();
     assert!(cs.len() >= 20, "{} rows in the window", cs.len());
     let mean = cs.iter().sum::<f64>() / cs.len() as f64;
-    println!("C_s over z/D = 0.01-0.04: mean {mean:.3} over {} rows", cs.len());
+    println!(
+        "C_s over z/D = 0.01-0.04: mean {mean:.3} over {} rows",
+        cs.len()
+    );
     assert!(
         (PI..=2.0 * PI).contains(&mean),
         "C_s {mean:.3} outside [pi, 2 pi]"
