@@ -245,7 +245,10 @@ async fn submit_job(
         .await;
     match admission {
         Ok(Admission::Accepted(row)) => {
-            state.jobs.job_queued();
+            match ladder_parts {
+                Some(_) => state.jobs.jobs_queued(),
+                None => state.jobs.job_queued(),
+            }
             tracing::info!(%id, name = %case.name, "job queued");
             let location = format!("/v1/jobs/{id}");
             // what `mpsfsi check` would advise, told at once rather than only in the

@@ -95,6 +95,14 @@ impl Jobs {
         self.wake.notify_one();
     }
 
+    /// Tell every sleeping worker that jobs are waiting: a ladder's parts, or an
+    /// announcement from another node, which may be a ladder's (the workers that find
+    /// nothing to claim sleep again).
+    pub fn jobs_queued(&self) {
+        self.wake.notify_waiters();
+        self.wake.notify_one();
+    }
+
     fn cancel_flag(&self, id: Uuid) -> Arc<AtomicBool> {
         let mut flags = self.cancel_flags.lock().unwrap_or_else(|p| p.into_inner());
         flags.entry(id).or_default().clone()
@@ -655,7 +663,7 @@ pub fn spawn_queue_listener(jobs: &Arc<Jobs>) -> Option<tokio::task::JoinHandle<
             jobs.job_queued();
             loop {
                 match listener.try_recv().await {
-                    Ok(Some(_)) => jobs.job_queued(),
+                    Ok(Some(_)) => jobs.jobs_queued(),
                     // the connection was lost and is back: what was announced meanwhile is not
                     Ok(None) => jobs.job_queued(),
                     Err(sqlx::Error::PoolClosed) => return,
