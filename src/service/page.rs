@@ -112,9 +112,20 @@ pub fn job_page(
         }
         html.push_str("</ul>\n");
     }
+    // a ladder's coarser parts run beside the user's level, on whichever workers are free
+    let ladder = match row.uncertainty {
+        true => {
+            let coarser = (row.parts - 1).max(0);
+            format!(
+                "; error bars: {} of {coarser} coarser runs ended",
+                row.part.min(coarser)
+            )
+        }
+        false => String::new(),
+    };
     let _ = writeln!(
         html,
-        "<p><progress value=\"{fraction:.4}\" max=\"1\"></progress> {:.1} %: t = {:.4} ms of {:.4} ms, step {}</p>",
+        "<p id=\"progress\"><progress value=\"{fraction:.4}\" max=\"1\"></progress> {:.1} %: t = {:.4} ms of {:.4} ms, step {}{ladder}</p>",
         100.0 * fraction,
         row.simulated_time * 1e3,
         row.end_time * 1e3,

@@ -124,6 +124,11 @@ async fn a_ladder_s_parts_run_at_once_and_give_the_cli_s_half_widths() {
     );
     assert_eq!(job["progress"]["part"], 7);
     assert_eq!(job["progress"]["parts"], 7);
+    let page = app.page(&id).await;
+    assert!(
+        page.contains("error bars: 6 of 6 coarser runs ended"),
+        "{page}"
+    );
 
     // the same files as the CLI's ladder, byte for byte
     let cli = cli_ladder(&case, "parts-cli");
