@@ -296,3 +296,45 @@ async fn wait_rows(
         tokio::time::sleep(Duration::from_millis(20)).await;
     }
 }
+
+/// With Postgres, cancelling a ladder reaches its parts on other worker processes (at
+/// their next lease renewal) and its queued parts.
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn cancelling_a_ladder_reaches_its_parts_on_other_workers() {
+    use crate::pg_server::PgServer;
+    use crate::postgres::{node, stop, worker_process};
+    let Some(pg) = PgServer::start_or_skip("parts_cancel").await else {
+        return;
+    };
+    let url = pg.fresh_database().await;
+    let api = node(&url, "pg-parts-cancel").await;
+    let store = JobStore::open(&url).await.unwrap();
+    let workers = [
+        worker_process(&url, &fresh_data_dir("pg-parts-cancel-a"), 1.5),
+        worker_process(&url, &fresh_data_dir("pg-parts-cancel-b"), 1.5),
+    ];
+    let id = submit_ladder(&api, &tiny_case(100.0)).await;
+    wait_rows(&store, &id, |job, parts| {
+        job.status == JobStatus::Running && parts.iter().any(|p| p.status == JobStatus::Running)
+    })
+    .await;
+    let cancelled = api
+        .client
+        .post(api.url(&format!("/v1/jobs/{id}/cancel")))
+        .send()
+        .await
+        .unwrap();
+    assert_eq!(cancelled.status().as_u16(), 202);
+    let (job, parts) = wait_rows(&store, &id, |job, parts| {
+        job.status.is_finished() && parts.iter().all(|p| p.status.is_finished())
+    })
+    .await;
+    workers.into_iter().for_each(stop);
+    assert_eq!(job.status, JobStatus::Cancelled, "{job:?}");
+    assert!(
+        parts.iter().all(|p| p.status == JobStatus::Cancelled),
+        "{parts:#?}"
+    );
+    store.close().await;
+    api.stop().await;
+}
