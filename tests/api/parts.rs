@@ -185,15 +185,10 @@ async fn cancelling_a_ladder_ends_its_parts() {
     let store = sqlite_store(&app).await;
     let id = submit_ladder(&app, &tiny_case(100.0)).await;
     // both workers busy: the job's own level and its first part
-    let start = Instant::now();
-    loop {
-        let (_, parts) = rows(&store, &id).await;
-        if parts.iter().any(|p| p.status == JobStatus::Running) {
-            break;
-        }
-        assert!(start.elapsed() < Duration::from_secs(30), "no part started");
-        tokio::time::sleep(Duration::from_millis(20)).await;
-    }
+    wait_rows(&store, &id, |_, parts| {
+        parts.iter().any(|p| p.status == JobStatus::Running)
+    })
+    .await;
     let cancelled = app
         .client
         .post(app.url(&format!("/v1/jobs/{id}/cancel")))
@@ -204,16 +199,11 @@ async fn cancelling_a_ladder_ends_its_parts() {
     let job = app.wait_finished(&id).await;
     assert_eq!(job["status"], "cancelled", "{job:#}");
     // the running part stops at its next step, the queued ones never start
-    let start = Instant::now();
-    loop {
-        let (_, parts) = rows(&store, &id).await;
-        if parts.iter().all(|p| p.status == JobStatus::Cancelled) {
-            assert_eq!(parts.len(), 6);
-            break;
-        }
-        assert!(start.elapsed() < Duration::from_secs(10), "{parts:#?}");
-        tokio::time::sleep(Duration::from_millis(20)).await;
-    }
+    let (_, parts) = wait_rows(&store, &id, |_, parts| {
+        parts.iter().all(|p| p.status == JobStatus::Cancelled)
+    })
+    .await;
+    assert_eq!(parts.len(), 6);
     store.close().await;
     app.stop().await;
 }

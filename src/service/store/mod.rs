@@ -268,34 +268,23 @@ impl JobStore {
         let queued = "UPDATE jobs SET status = 'cancelled', reason = 'its job ended',
                  finished_at = $1
              WHERE parent = $2 AND status = 'queued'";
-        let running = "UPDATE jobs SET cancel_requested = TRUE
-             WHERE parent = $1 AND status = 'running' RETURNING id";
-        let parent = parent.to_string();
-        let ids: Vec<String> = match self {
-            Self::Sqlite(s) => {
-                sqlx::query(queued)
-                    .bind(now_rfc3339())
-                    .bind(&parent)
-                    .execute(&s.pool)
-                    .await?;
-                let sql = "SELECT id FROM jobs WHERE parent = $1 AND status = 'running'";
-                sqlx::query_scalar(sql)
-                    .bind(&parent)
-                    .fetch_all(&s.pool)
-                    .await?
-            }
-            Self::Postgres(s) => {
-                sqlx::query(queued)
-                    .bind(now_rfc3339())
-                    .bind(&parent)
-                    .execute(&s.pool)
-                    .await?;
-                sqlx::query_scalar(running)
-                    .bind(&parent)
-                    .fetch_all(&s.pool)
-                    .await?
+        // Postgres flags them for their workers; SQLite's workers are this process's
+        let running = match self {
+            Self::Sqlite(_) => "SELECT id FROM jobs WHERE parent = $1 AND status = 'running'",
+            Self::Postgres(_) => {
+                "UPDATE jobs SET cancel_requested = TRUE
+                 WHERE parent = $1 AND status = 'running' RETURNING id"
             }
         };
+        let parent = parent.to_string();
+        let ids: Vec<String> = either!(self, s => {
+            sqlx::query(queued)
+                .bind(now_rfc3339())
+                .bind(&parent)
+                .execute(&s.pool)
+                .await?;
+            sqlx::query_scalar(running).bind(&parent).fetch_all(&s.pool).await?
+        });
         ids.iter().map(|id| parse_uuid(id)).collect()
     }
 
