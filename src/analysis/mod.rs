@@ -7,4 +7,5 @@
 pub mod envelope;
 pub mod measure;
 pub mod reference;
+pub mod similarity;
 pub mod uncertainty;
