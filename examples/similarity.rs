@@ -657,9 +657,6 @@ fn regrid(wedge: &Wedge, surface: &Surface, grading: &Grading) -> Surface {
         if let Some(j) = (1..end).min_by(|&a, &b| thick(s[a]).total_cmp(&thick(s[b]))) {
             let t_min = thick(s[j]);
             if t_min < 2.0 * grading.cut && (0..j).any(|k| thick(s[k]) > 1.1 * t_min) {
-                if std::env::var("BLOB").is_ok() {
-                    eprintln!("blob cut at node {j}");
-                }
                 start = s[j];
             }
         }
@@ -959,10 +956,7 @@ fn main() {
         tau += march_step(&wedge, &mut surface, &params, &grading);
         steps += 1;
         if tau >= next_report {
-            next_report += std::env::var("EVERY")
-                .ok()
-                .and_then(|v| v.parse().ok())
-                .unwrap_or(1.0);
+            next_report += 1.0;
             let pressure = FacePressure::new(&wedge, &flow(&wedge, &surface, &params));
             let (z_max, cp_max) = pressure.peak();
             eprintln!(
@@ -972,26 +966,6 @@ fn main() {
                 start.elapsed().as_secs_f64()
             );
         }
-    }
-    if let Ok(path) = std::env::var("DUMP") {
-        let fl = flow(&wedge, &surface, &params);
-        let mut out = String::new();
-        for i in 0..surface.x.len() {
-            out += &format!(
-                "{} {} {} {} {} {}\n",
-                i,
-                surface.x[i][0],
-                surface.x[i][1],
-                surface.phi[i],
-                fl.velocity[i][0],
-                fl.velocity[i][1]
-            );
-        }
-        out += "face\n";
-        for (s, p) in fl.face_s.iter().zip(&fl.face_phi) {
-            out += &format!("{s} {p}\n");
-        }
-        std::fs::write(path, out).unwrap();
     }
     let pressure = FacePressure::new(&wedge, &flow(&wedge, &surface, &params));
     let (z_max, cp_max) = pressure.peak();
