@@ -7,6 +7,7 @@ mod apex;
 mod circle;
 mod common;
 mod coupling;
+mod gauges;
 mod hydrostatics;
 mod impact;
 mod plate_impulse;
