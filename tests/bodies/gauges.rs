@@ -41,12 +41,13 @@ struct Reading {
     peak_time: f64,
 }
 
-/// Run the user-style wedge of `deadrise` degrees with the four gauges and read them.
-fn gauge_readings(deadrise: f64) -> Vec<Reading> {
+/// Run the user-style wedge of `deadrise` degrees at `spacing` with the four gauges and
+/// read them.
+fn gauge_readings(deadrise: f64, spacing: f64) -> Vec<Reading> {
     let solution = similarity::solution(deadrise).expect("a tabulated deadrise");
     let t_chine = chine_time(deadrise);
     let tan = deadrise.to_radians().tan();
-    let mut case: Value = serde_json::from_str(&user_wedge(deadrise, 0.005, t_chine)).unwrap();
+    let mut case: Value = serde_json::from_str(&user_wedge(deadrise, spacing, t_chine)).unwrap();
     let gauges: Vec<(String, f64)> = FRACTIONS
         .iter()
         .map(|f| (format!("face_{:.0}", 100.0 * f), f * HALF_BREADTH))
@@ -57,7 +58,7 @@ fn gauge_readings(deadrise: f64) -> Vec<Reading> {
         .collect::<Vec<_>>() });
     let case = ValidCase::new(parse_case_value(case).unwrap(), &Limits::default()).unwrap();
     let dir = std::env::temp_dir().join(format!(
-        "mpsfsi-bodies-gauges-{deadrise}-{}",
+        "mpsfsi-bodies-gauges-{deadrise}-{spacing}-{}",
         std::process::id()
     ));
     let summary = run_case(&case, &dir, &mut Quiet).expect("the run directory is written");
@@ -109,10 +110,10 @@ fn gauge_readings(deadrise: f64) -> Vec<Reading> {
     readings
 }
 
-fn check_family_member(deadrise: f64) {
-    for (g, fraction) in gauge_readings(deadrise).into_iter().zip(FRACTIONS) {
+fn check_family_member(deadrise: f64, spacing: f64) {
+    for (g, fraction) in gauge_readings(deadrise, spacing).into_iter().zip(FRACTIONS) {
         println!(
-            "{deadrise}° {}: mean {:+.1} % wetted, {:+.1} % below the root; RMS {:.0} % of Cp_max; largest pressure_max {:.2} Cp_max at {:.2} of the passage",
+            "{deadrise}° at {spacing} m {}: mean {:+.1} % wetted, {:+.1} % below the root; RMS {:.0} % of Cp_max; largest pressure_max {:.2} Cp_max at {:.2} of the passage",
             g.name,
             100.0 * (g.wetted_mean - 1.0),
             100.0 * (g.root_mean - 1.0),
@@ -135,6 +136,18 @@ fn check_family_member(deadrise: f64) {
 #[ignore = "four user-style wedges with gauges, about a minute and a half"]
 fn gauges_on_the_user_style_wedges_against_the_similarity_pressure() {
     for deadrise in [15.0, 20.0, 25.0, 40.0] {
-        check_family_member(deadrise);
+        check_family_member(deadrise, 0.005);
+    }
+}
+
+/// The same at half the spacing (B/l0 = 200) for 20° and 40°: whether refinement moves
+/// the scatter. It does not remove it: below the root the means read −4.3 … +2.8 %, the
+/// RMS difference 28–33 % (20°) and 23 % (40°) of Cp_max against 16–52 % and 35–45 % at
+/// 5 mm, the largest `pressure_max` 2.67–7.39 and 1.87–2.63 Cp_max.
+#[test]
+#[ignore = "two user-style wedges at 2.5 mm with gauges, ten minutes"]
+fn gauges_on_two_user_style_wedges_at_half_the_spacing() {
+    for deadrise in [20.0, 40.0] {
+        check_family_member(deadrise, 0.0025);
     }
 }
