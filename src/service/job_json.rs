@@ -5,7 +5,8 @@ use serde_json::{json, Value};
 
 /// The JSON form of a job record.
 pub fn job_json(row: &JobRow) -> Value {
-    // a ladder's parts count equally: part k at fraction f of its end time is (k + f) / parts
+    // a ladder's parts count equally: k coarser parts ended and the user's level at
+    // fraction f of its end time is (k + f) / parts
     let parts = row.parts.max(1) as f64;
     let fraction = match row.status {
         JobStatus::Succeeded => 1.0,
