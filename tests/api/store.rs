@@ -54,6 +54,7 @@ store_cases!(
     case_text_is_the_submitted_text,
     delete_removes_the_job_and_its_rows_and_no_other_job_s,
     finished_before_lists_only_jobs_that_ended_before_the_cutoff,
+    a_ladder_s_parts_run_after_their_job_and_end_with_it,
 );
 
 async fn sqlite_store(tag: &str) -> JobStore {
@@ -192,6 +193,69 @@ async fn claim_takes_the_oldest_queued_job(store: &JobStore) {
     assert!(
         store.claim_next(&claimant(), None).await.unwrap().is_none(),
         "running jobs are not claimed again"
+    );
+}
+
+/// A ladder (`Some(3)`: the job and two parts) queues its parts behind it; they are not
+/// listed and do not fill the queue, and a claim for the job's parts takes only them.
+/// Once the job has ended without them (here a finish; a restart's recovery or an expired
+/// lease alike) no claim takes its queued part, the next claim cancels it, and with
+/// Postgres the running part is asked to stop at its next renewal.
+async fn a_ladder_s_parts_run_after_their_job_and_end_with_it(store: &JobStore) {
+    let id = Uuid::new_v4();
+    let admitted = store
+        .submit(id, "ladder", &case_of("ladder"), 0.5, Some(3), 1)
+        .await
+        .unwrap();
+    assert!(matches!(admitted, Admission::Accepted(_)));
+    assert!(
+        try_submit(store, "after", 1).await.is_none(),
+        "the job fills a queue of one; its parts do not count"
+    );
+    let (listed, total) = store.list(None, 10, 0).await.unwrap();
+    assert_eq!((listed.len(), total), (1, 1));
+    let parts = store.parts(id).await.unwrap();
+    assert_eq!(parts.iter().map(|p| p.part).collect::<Vec<_>>(), [1, 2]);
+    assert!(parts.iter().all(|p| p.parent == Some(id) && p.parts == 3));
+
+    let job = claim(store).await;
+    assert_eq!(job.row.id, id, "the job before its parts");
+    assert_eq!((job.row.uncertainty, job.row.parts), (true, 3));
+    let running = store
+        .claim_next(&claimant(), Some(id))
+        .await
+        .unwrap()
+        .expect("a part of the job");
+    assert_eq!(running.row.id, parts[0].id);
+    store.part_ended(id).await.unwrap();
+    assert_eq!(row(store, id).await.part, 1);
+
+    assert!(store
+        .finish(
+            id,
+            job.attempt(),
+            JobStatus::Failed,
+            Some("x"),
+            None,
+            0,
+            0.0
+        )
+        .await
+        .unwrap());
+    let other = submit(store, "other").await;
+    assert_eq!(claim(store).await.row.id, other, "not the older part");
+    let queued = store.get(parts[1].id).await.unwrap().unwrap();
+    assert_eq!(queued.status, JobStatus::Cancelled);
+    assert_eq!(queued.reason.as_deref(), Some("its job ended"));
+    let renewal = store
+        .renew(running.row.id, running.attempt(), 600.0)
+        .await
+        .unwrap();
+    assert_eq!(
+        renewal,
+        Renewal::Held {
+            cancel: store.is_shared()
+        }
     );
 }
 

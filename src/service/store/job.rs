@@ -91,6 +91,21 @@ pub(super) const CLAIMABLE: &str = "(CAST($4 AS TEXT) IS NULL OR jobs.parent = $
      AND (jobs.parent IS NULL OR EXISTS (SELECT 1 FROM jobs AS owner
           WHERE owner.id = jobs.parent AND owner.status IN ('queued', 'running')))";
 
+/// Before a claim, the queued parts of a job that has ended are cancelled (no claim
+/// would take them); `$1` is the time. A job ends without its worker's help when a
+/// restart or an expired lease fails it.
+pub(super) const CANCEL_ORPHANED_PARTS: &str = "UPDATE jobs SET status = 'cancelled',
+         reason = 'its job ended', finished_at = $1
+     WHERE parent IS NOT NULL AND status = 'queued' AND NOT EXISTS (SELECT 1 FROM jobs AS owner
+           WHERE owner.id = jobs.parent AND owner.status IN ('queued', 'running'))";
+
+/// With Postgres, the running parts of a job that has ended are flagged to stop, as a
+/// cancel request is (read at their next lease renewal).
+pub(super) const STOP_ORPHANED_PARTS: &str = "UPDATE jobs SET cancel_requested = TRUE
+     WHERE parent IS NOT NULL AND status = 'running' AND NOT cancel_requested
+       AND NOT EXISTS (SELECT 1 FROM jobs AS owner
+           WHERE owner.id = jobs.parent AND owner.status IN ('queued', 'running'))";
+
 /// A row as both databases return it (text ids and statuses); [`RawJob::into_row`]
 /// checks them.
 #[derive(sqlx::FromRow)]

@@ -9,7 +9,8 @@
 //! `lease_until` as it was, since a lease is read only while its job is `running`.
 
 use super::job::{
-    now_rfc3339, Claimant, ClaimedJob, RawClaim, Renewal, ATTEMPTS_EXHAUSTED, CLAIMABLE, COLUMNS,
+    now_rfc3339, Claimant, ClaimedJob, RawClaim, Renewal, ATTEMPTS_EXHAUSTED,
+    CANCEL_ORPHANED_PARTS, CLAIMABLE, COLUMNS, STOP_ORPHANED_PARTS,
 };
 use sqlx::postgres::{PgListener, PgPool, PgPoolOptions, Postgres};
 use sqlx::Transaction;
@@ -77,7 +78,7 @@ impl PgStore {
     }
 
     /// End the jobs whose lease expired and that must not run again (cancel requested,
-    /// or `max_attempts` claims spent), then claim the oldest queued or expired job and
+    /// or `max_attempts` claims spent) and the parts of ended jobs, then claim the oldest queued or expired job and
     /// discard what an earlier attempt uploaded.
     pub async fn claim_next(
         &self,
@@ -97,6 +98,11 @@ impl PgStore {
         .bind(i64::from(by.max_attempts))
         .execute(&mut *tx)
         .await?;
+        sqlx::query(CANCEL_ORPHANED_PARTS)
+            .bind(now_rfc3339())
+            .execute(&mut *tx)
+            .await?;
+        sqlx::query(STOP_ORPHANED_PARTS).execute(&mut *tx).await?;
         let claimed: Option<RawClaim> = sqlx::query_as(&format!(
             "WITH next AS (
                  SELECT seq FROM jobs

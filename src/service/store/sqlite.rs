@@ -3,7 +3,9 @@
 //! the previous process ([`SqliteStore::recover_interrupted`]). The queries both stores
 //! share are in [`super::JobStore`].
 
-use super::job::{now_rfc3339, Claimant, ClaimedJob, RawClaim, CLAIMABLE, COLUMNS};
+use super::job::{
+    now_rfc3339, Claimant, ClaimedJob, RawClaim, CANCEL_ORPHANED_PARTS, CLAIMABLE, COLUMNS,
+};
 use sqlx::sqlite::{
     SqliteConnectOptions, SqliteJournalMode, SqlitePool, SqlitePoolOptions, SqliteSynchronous,
 };
@@ -49,6 +51,11 @@ impl SqliteStore {
         by: &Claimant,
         parts_of: Option<&str>,
     ) -> Result<Option<ClaimedJob>, sqlx::Error> {
+        // running parts stop through this process's flags (`Jobs::cancel_parts`)
+        sqlx::query(CANCEL_ORPHANED_PARTS)
+            .bind(now_rfc3339())
+            .execute(&self.pool)
+            .await?;
         let claimed: Option<RawClaim> = sqlx::query_as(&format!(
             "UPDATE jobs SET status = 'running', started_at = $1, attempts = attempts + 1,
                  worker = $2, run_dir = $3 || id
