@@ -74,6 +74,19 @@ pub const SIMILARITY_PEAK: [(Real, Real, Real); 6] = [
     (40.0, 3.266, 0.2866),
 ];
 
+/// The 30° wedge's Cp along the wetted face at z/(Vt) = −1 (keel) … 0.3 (docs/references.md,
+/// the project's self-similar solution; `analysis::similarity` holds the whole profile).
+pub const WEDGE_30_FACE_PRESSURE: [(Real, Real); 8] = [
+    (-1.0, 4.59),
+    (-0.75, 4.54),
+    (-0.5, 4.62),
+    (-0.25, 4.83),
+    (0.0, 5.25),
+    (0.1, 5.52),
+    (0.2, 5.88),
+    (0.3, 6.35),
+];
+
 /// (Cp_max, z_max / (V t)) of the tabulated deadrise within 0.5° of `beta` (radians);
 /// None between the table's angles, where the peak is not interpolated.
 pub fn similarity_peak(beta: Real) -> Option<(Real, Real)> {

@@ -531,16 +531,7 @@ const PROFILE_40: [(Real, Real); 79] = [
 #[cfg(test)]
 mod tests {
     use super::*;
-
-    /// Zhao & Faltinsen (1993), the similarity solution: β (degrees), Cp_max, z_max/(Vt).
-    const ZHAO_FALTINSEN: [(Real, Real, Real); 6] = [
-        (10.0, 77.85, 0.5556),
-        (15.0, 33.27, 0.5361),
-        (20.0, 17.77, 0.5087),
-        (25.0, 10.69, 0.4709),
-        (30.0, 6.927, 0.4243),
-        (40.0, 3.266, 0.2866),
-    ];
+    use crate::analysis::reference::{SIMILARITY_PEAK, WEDGE_30_FACE_PRESSURE};
 
     /// C_F of the similarity solution in docs/references.md (±0.3 %).
     const FORCE: [(Real, Real); 5] = [
@@ -570,7 +561,7 @@ mod tests {
     #[test]
     fn the_tables_peaks_reproduce_zhao_and_faltinsen() {
         for s in &SOLUTIONS {
-            let (_, cp, z) = ZHAO_FALTINSEN
+            let (_, cp, z) = SIMILARITY_PEAK
                 .iter()
                 .copied()
                 .find(|r| r.0 == s.deadrise_deg)
@@ -593,17 +584,7 @@ mod tests {
 
     #[test]
     fn the_30_degree_table_matches_the_reference_face_pressures() {
-        let reference = [
-            (-1.0, 4.59),
-            (-0.75, 4.54),
-            (-0.5, 4.62),
-            (-0.25, 4.83),
-            (0.0, 5.25),
-            (0.1, 5.52),
-            (0.2, 5.88),
-            (0.3, 6.35),
-        ];
-        for (z, cp) in reference {
+        for (z, cp) in WEDGE_30_FACE_PRESSURE {
             let table = cp_at(30.0, z).unwrap();
             assert!(
                 (table / cp - 1.0).abs() < 0.02,

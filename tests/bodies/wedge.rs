@@ -6,6 +6,7 @@ use crate::common::*;
 use mpsfsi::analysis::measure::{
     fit_force_coefficient, force_coefficient_from_contact, force_coefficient_from_onset,
 };
+use mpsfsi::analysis::reference::WEDGE_30_FACE_PRESSURE;
 use mpsfsi::coupling::CouplingOptions;
 use mpsfsi::engine::Simulation;
 use mpsfsi::math::Vec2;
@@ -176,16 +177,7 @@ pub fn wedge_fit(overrides: &[String]) -> WedgeFit {
 }
 
 /// Similarity solution's Cp along the wetted wall (docs/references.md), (z/(Vt), Cp).
-const CP_TABLE: [(f64, f64); 8] = [
-    (-1.0, 4.59),
-    (-0.75, 4.54),
-    (-0.5, 4.62),
-    (-0.25, 4.83),
-    (0.0, 5.25),
-    (0.1, 5.52),
-    (0.2, 5.88),
-    (0.3, 6.35),
-];
+const CP_TABLE: [(f64, f64); 8] = WEDGE_30_FACE_PRESSURE;
 
 /// The similarity solution's largest Cp at 30° and its height over V t (Zhao &
 /// Faltinsen 1993; docs/references.md).
