@@ -49,6 +49,16 @@ pub fn stop(mut child: Child) {
     let _ = child.wait();
 }
 
+/// Send a worker SIGTERM and wait for it: it must exit cleanly (status 0).
+pub fn terminate(child: &mut Child) {
+    let term = Command::new("kill")
+        .args(["-TERM", &child.id().to_string()])
+        .status()
+        .unwrap();
+    assert!(term.success());
+    assert!(child.wait().unwrap().success(), "the worker exits cleanly");
+}
+
 /// Rows of a loads CSV per (time, object) text: each must appear once.
 fn load_rows(csv: &str) -> BTreeMap<(String, String), usize> {
     let mut rows = BTreeMap::new();
@@ -428,12 +438,7 @@ async fn a_worker_stopped_with_sigterm_gives_its_job_back_at_once() {
     let mut first = worker_process_with(&url, &data, lease_s, &["--shutdown-grace-s", "0"]);
     let id = api.submit(&tiny_case(2.0)).await;
     api.wait_running(&id).await;
-    let term = Command::new("kill")
-        .args(["-TERM", &first.id().to_string()])
-        .status()
-        .unwrap();
-    assert!(term.success());
-    assert!(first.wait().unwrap().success(), "the worker exits cleanly");
+    terminate(&mut first);
     let job = api.job(&id).await;
     assert_eq!(job["status"], "queued", "{job}");
 

@@ -6,7 +6,7 @@
 
 use crate::helpers::{fresh_data_dir, tiny_case, Api};
 use crate::pg_server::PgServer;
-use crate::postgres::{node, stop};
+use crate::postgres::{node, stop, terminate};
 use mpsfsi::case::{parse_case_str, Limits, ValidCase};
 use mpsfsi::run::{run_case, Quiet, RunStatus};
 use serde_json::Value;
@@ -140,12 +140,7 @@ async fn a_sigterm_ed_worker_s_job_resumes_without_using_up_an_attempt() {
     let id = api.submit(&case).await;
     api.wait_running(&id).await;
     tokio::time::sleep(Duration::from_millis(500)).await;
-    let term = Command::new("kill")
-        .args(["-TERM", &first.id().to_string()])
-        .status()
-        .unwrap();
-    assert!(term.success());
-    assert!(first.wait().unwrap().success(), "the worker exits cleanly");
+    terminate(&mut first);
     let log = std::fs::read_to_string(first_data.join("worker.log")).unwrap();
     assert!(
         log.contains("checkpoint stored"),
