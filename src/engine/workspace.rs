@@ -12,48 +12,38 @@ pub(crate) struct Workspace {
     /// explicit stage reads them).
     pub(crate) neighbors: NeighborList,
     pub(crate) contacts: WallContacts,
-    pub(crate) scratch: Scratch,
+    /// The pressure equation of the last step: its buffers, reused, and the exact
+    /// projection's correction, carried.
+    pub(crate) system: PressureSystem,
     /// The pressure preconditioner carried from step to step (the AMG hierarchy, see
     /// engine::pressure::reuse). It changes the iterates of later solves (within the
     /// solver tolerance), so it lives with the simulation it serves.
     pub(crate) solver_cache: SolverCache,
 }
 
-/// Buffers reused from step to step. Every one but `exact_correction` is written by a
-/// step before that step reads it, so a checkpoint skips them (they were half of the
-/// state of the 30° wedge: 6 of 12 MB at 20 000 particles).
+/// The pressure equation A p = b over the unknown (not free-surface) particles, written
+/// by the assembly stage and solved by the solve stage; the correction stage reads its
+/// wall gradients. Every buffer but `exact_correction` is written by a step before that
+/// step reads it, so a checkpoint skips them (they were half of the state of the 30°
+/// wedge: 6 of 12 MB at 20 000 particles); they are kept only to be refilled without
+/// allocation.
 #[derive(Debug, Default, serde::Serialize, serde::Deserialize)]
-pub(crate) struct Scratch {
+pub(crate) struct PressureSystem {
+    /// The Neumann extrapolation gradient c = rho (g - a_w) of every wall contact.
     #[serde(skip)]
-    pub(crate) x_star: Vec<Vec2>,
-    /// u^n, before the explicit forces.
-    #[serde(skip)]
-    pub(crate) u_start: Vec<Vec2>,
-    #[serde(skip)]
-    pub(crate) n_star: Vec<Real>,
-    /// The source's ∇·u* at x* (walls' share with u^n).
-    #[serde(skip)]
-    pub(crate) div_star: Vec<Real>,
+    pub(crate) neumann: Vec<Vec2>,
+    /// Row of each particle (u32::MAX for a Dirichlet particle), and particle of each row.
     #[serde(skip)]
     pub(crate) unknown_of: Vec<u32>,
     #[serde(skip)]
     pub(crate) particle_of: Vec<u32>,
     #[serde(skip)]
+    pub(crate) matrix: CsrMatrix,
+    #[serde(skip)]
     pub(crate) rhs: Vec<Real>,
+    /// The initial guess (the last pressures), then the solution.
     #[serde(skip)]
     pub(crate) solution: Vec<Real>,
-    #[serde(skip)]
-    pub(crate) neumann: Vec<Vec2>,
-    /// Dirichlet value of each free-surface particle, and the penalty's target of each
-    /// graded one (0 elsewhere).
-    #[serde(skip)]
-    pub(crate) surface_pressure: Vec<Real>,
-    /// Surface share s in (0, 1) of a particle at the edge of the graded surface test,
-    /// 0 elsewhere (`Scheme::soft_surface`).
-    #[serde(skip)]
-    pub(crate) surface_softness: Vec<Real>,
-    #[serde(skip)]
-    pub(crate) matrix: CsrMatrix,
     /// The source's terms beyond (rho/dt) ∇·u* (ECS, PND relaxation), per particle, for
     /// the exact projection.
     #[serde(skip)]

@@ -250,6 +250,20 @@ pub fn conjugate_gradient(
     }
 }
 
+/// The work vectors of conjugate gradients (residual r, preconditioned residual z,
+/// direction p, product q), kept by a caller that solves again and again
+/// (`SolverCache`): reused rather than allocated, they sit at the same addresses from
+/// solve to solve. Allocated per solve, their placement followed the step's other
+/// allocations, and the 30° wedge's solve moved by 3-5 % with changes to code outside
+/// it.
+#[derive(Default)]
+pub(crate) struct CgVectors {
+    r: Vec<Real>,
+    z: Vec<Real>,
+    p: Vec<Real>,
+    q: Vec<Real>,
+}
+
 /// Conjugate gradients with the preconditioner `precondition(r, z)`: z = M⁻¹ r, M
 /// symmetric positive definite.
 pub(crate) fn pcg_with(
@@ -257,19 +271,41 @@ pub(crate) fn pcg_with(
     b: &[Real],
     x: &mut [Real],
     params: SolveParams,
+    precondition: impl FnMut(&[Real], &mut [Real]),
+) -> Result<SolveInfo, SolveError> {
+    pcg_in(a, b, x, params, &mut CgVectors::default(), precondition)
+}
+
+/// [`pcg_with`] in the work vectors `work`.
+pub(crate) fn pcg_in(
+    a: &CsrMatrix,
+    b: &[Real],
+    x: &mut [Real],
+    params: SolveParams,
+    work: &mut CgVectors,
     mut precondition: impl FnMut(&[Real], &mut [Real]),
 ) -> Result<SolveInfo, SolveError> {
     let n = a.n;
-    let Some(Start { bnorm, r: r0 }) = start(a, b, x) else {
+    if n == 0 {
         return Ok(SolveInfo::default());
-    };
-    let mut r = r0;
-    let mut z = vec![0.0; n];
-    precondition(&r, &mut z);
-    let mut p = z.clone();
-    let mut q = vec![0.0; n];
-    let mut rz = dot(&r, &z);
-    let mut rel = dot(&r, &r).sqrt() / bnorm;
+    }
+    let bnorm = dot(b, b).sqrt();
+    if bnorm == 0.0 {
+        x.iter_mut().for_each(|v| *v = 0.0);
+        return Ok(SolveInfo::default());
+    }
+    let CgVectors { r, z, p, q } = work;
+    for v in [&mut *r, &mut *z, &mut *p, &mut *q] {
+        v.clear();
+        v.resize(n, 0.0);
+    }
+    // r = b - A x
+    a.mul(x, r);
+    for_each_index(r, |i, ri| *ri = b[i] - *ri);
+    precondition(r, z);
+    p.copy_from_slice(z);
+    let mut rz = dot(r, z);
+    let mut rel = dot(r, r).sqrt() / bnorm;
     let mut it = 0;
     while rel > params.tolerance {
         if it >= params.max_iterations {
@@ -281,15 +317,15 @@ pub(crate) fn pcg_with(
         // fused passes: q = A p with p·q, r -= alpha q with r·r, and x += alpha p with
         // p = z + beta p; each sum is the one a separate `dot` gives, bit for bit
         let parallel = n >= PARALLEL_MIN;
-        let pq = deterministic_sum_mut(&mut q, parallel, |i, qi| {
-            *qi = a.row_dot(i, &p);
+        let pq = deterministic_sum_mut(q, parallel, |i, qi| {
+            *qi = a.row_dot(i, p);
             p[i] * *qi
         });
         if !(pq.is_finite()) || pq == 0.0 {
             return Err(SolveError::Breakdown);
         }
         let alpha = rz / pq;
-        let rr = deterministic_sum_mut(&mut r, parallel, |i, ri| {
+        let rr = deterministic_sum_mut(r, parallel, |i, ri| {
             *ri += -alpha * q[i];
             *ri * *ri
         });
@@ -304,11 +340,11 @@ pub(crate) fn pcg_with(
             for_each_index(x, |i, xi| *xi += alpha * p[i]);
             break;
         }
-        precondition(&r, &mut z);
-        let rz_new = dot(&r, &z);
+        precondition(r, z);
+        let rz_new = dot(r, z);
         let beta = rz_new / rz;
         rz = rz_new;
-        update_iterate(x, &mut p, &z, alpha, beta);
+        update_iterate(x, p, z, alpha, beta);
     }
     Ok(SolveInfo {
         iterations: it,

@@ -29,7 +29,7 @@
 //! depend on the number of threads: results stay deterministic.
 
 use super::amg::Hierarchy;
-use super::pcg::{count_setup, pcg_with};
+use super::pcg::{count_setup, pcg_in, pcg_with, CgVectors};
 use super::{CsrMatrix, SolveError, SolveInfo, SolveParams};
 use crate::math::Real;
 
@@ -91,6 +91,9 @@ pub struct SolverCache {
     iterations_after_build: usize,
     last_iterations: usize,
     counts: ReuseCounts,
+    /// CG's work vectors, reused by every solve.
+    #[serde(skip)]
+    vectors: CgVectors,
 }
 
 impl std::fmt::Debug for SolverCache {
@@ -219,7 +222,7 @@ pub fn solve_amg_reusing(
     let guess = reused.then(|| x.to_vec());
     let mut result = {
         let h = cache.hierarchy.as_mut().expect("built above");
-        pcg_with(a, b, x, params, |r, z| h.apply(a, r, z))
+        pcg_in(a, b, x, params, &mut cache.vectors, |r, z| h.apply(a, r, z))
     };
     if let (Err(_), Some(guess)) = (&result, guess) {
         // the reused hierarchy did not do: a new one, from the same initial guess
@@ -229,7 +232,7 @@ pub fn solve_amg_reusing(
         count_setup(clock);
         x.copy_from_slice(&guess);
         let h = cache.hierarchy.as_mut().expect("built above");
-        result = pcg_with(a, b, x, params, |r, z| h.apply(a, r, z));
+        result = pcg_in(a, b, x, params, &mut cache.vectors, |r, z| h.apply(a, r, z));
     } else if reused {
         cache.counts.reuses += 1;
     }

@@ -4,7 +4,7 @@
 use super::density::neighbor_list;
 use crate::engine::simulation::{SimError, Simulation};
 use crate::engine::walls::WallContacts;
-use crate::math::Real;
+use crate::math::{Real, Vec2};
 use rayon::prelude::*;
 
 /// How far, in cfl spacings, a particle keeping its acceleration may move in the next
@@ -15,10 +15,10 @@ const ACCELERATION_REACH: Real = 1.2;
 
 /// The longest next step over which no particle that keeps this step's acceleration a
 /// moves more than `ACCELERATION_REACH` cfl spacings: the root of dt (|u| + |a| dt) =
-/// reach, smallest over the particles.
-pub(super) fn acceleration_limited_dt(sim: &Simulation, dt: Real) -> Real {
+/// reach, smallest over the particles (a = (u - `u_start`) / dt).
+pub(super) fn acceleration_limited_dt(sim: &Simulation, u_start: &[Vec2], dt: Real) -> Real {
     let reach = ACCELERATION_REACH * sim.config.control.cfl * sim.config.params.l0;
-    let (u, u_start) = (&sim.particles.velocity, &sim.workspace.scratch.u_start);
+    let u = &sim.particles.velocity;
     u.par_iter()
         .zip(u_start.par_iter())
         .map(|(u, u0)| {

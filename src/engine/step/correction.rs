@@ -13,11 +13,16 @@ use crate::engine::walls::{moment_about, PlacedWall};
 use crate::math::{vec2, Real, Vec2};
 use rayon::prelude::*;
 
-/// ∇p of every particle at x*: the case's gradient form with the virtual wall points.
-pub(super) fn pressure_gradients<K: Kernel>(sim: &Simulation) -> Vec<Vec2> {
+/// ∇p of every particle at `x_star`: the case's gradient form with the virtual wall
+/// points, whose pressure follows the contacts' Neumann gradients `neumann`.
+pub(super) fn pressure_gradients<K: Kernel>(
+    sim: &Simulation,
+    x_star: &[Vec2],
+    neumann: &[Vec2],
+) -> Vec<Vec2> {
     let prm = &sim.config.params;
     let (re, c_grad, n0) = (prm.re, prm.gradient_coefficient, prm.n0);
-    let x = &sim.workspace.scratch.x_star;
+    let x = x_star;
     let p = &sim.particles.pressure;
     let nb = &sim.workspace.neighbors;
     let n = x.len();
@@ -40,7 +45,6 @@ pub(super) fn pressure_gradients<K: Kernel>(sim: &Simulation) -> Vec<Vec2> {
         close: sim.config.method.stabilization.distance * sim.config.params.l0,
     };
     let contacts = &sim.workspace.contacts;
-    let neumann = &sim.workspace.scratch.neumann;
     // Anisotropic and least-squares gradients (Imoto 2022 eq. 28 and LSMPS) away from
     // walls, in the linear form Σ g_ij (p_j - p_i) like GC; particles with wall contacts
     // use GC, whose moment matrix includes the virtual wall points.
@@ -73,10 +77,12 @@ pub(super) fn largest_displacement(sim: &Simulation, gradient: &[Vec2], dt: Real
         * dt
 }
 
-/// u^{n+1} = u* - dt/rho ∇p, x^{n+1} = x* - dt²/rho ∇p, and the wall loads.
+/// u^{n+1} = u* - dt/rho ∇p, x^{n+1} = x* - dt²/rho ∇p with ∇p `total` at `x_star`,
+/// and the wall loads.
 pub(super) fn correct_velocity_and_position<K: Kernel>(
     sim: &mut Simulation,
     walls: &[PlacedWall],
+    (x_star, neumann): (&[Vec2], &[Vec2]),
     total: &[Vec2],
     dt: Real,
     loads: &mut [WallLoad],
@@ -88,12 +94,11 @@ pub(super) fn correct_velocity_and_position<K: Kernel>(
         prm.gradient_coefficient,
         prm.particle_mass,
     );
-    let x = &sim.workspace.scratch.x_star;
+    let x = x_star;
     let p = &sim.particles.pressure;
     let nb = &sim.workspace.neighbors;
     let n = x.len();
     let contacts = &sim.workspace.contacts;
-    let neumann = &sim.workspace.scratch.neumann;
     // the surface pressure is read with either estimator: gauges and snapshots show it
     let w = |d: Real| K::w(d, re);
     let surfaces = surface_pressures(

@@ -59,20 +59,35 @@ fn add_wall_divergence(sim: &Simulation, div: &mut [Real], u_at_walls: &[Vec2]) 
     }
 }
 
-/// n* with the wall lattice and the source's ∇·u* at the predicted positions (the
-/// walls' share of the divergence with u^n).
-pub(super) fn compute_number_density_and_divergence<K: Kernel>(sim: &mut Simulation) {
-    let x = &sim.workspace.scratch.x_star;
-    let (fluid, mut div) = fluid_density_and_divergence::<K>(sim, x, &sim.particles.velocity);
-    add_wall_divergence(sim, &mut div, &sim.workspace.scratch.u_start);
-    sim.workspace.scratch.n_star = with_walls(sim, &fluid);
-    sim.workspace.scratch.div_star = div;
+/// n* with the wall lattice and the source's ∇·u* at the predicted positions.
+pub(super) struct AtPrediction {
+    pub(super) n: Vec<Real>,
+    /// ∇·u* (the walls' share with u^n).
+    pub(super) div: Vec<Real>,
+}
+
+/// n* and ∇·u* at `x_star`, with the velocities u* of the particles and the walls'
+/// share of the divergence with `u_start` (u^n).
+pub(super) fn at_prediction<K: Kernel>(
+    sim: &Simulation,
+    x_star: &[Vec2],
+    u_start: &[Vec2],
+) -> AtPrediction {
+    let (fluid, mut div) = fluid_density_and_divergence::<K>(sim, x_star, &sim.particles.velocity);
+    add_wall_divergence(sim, &mut div, u_start);
+    AtPrediction {
+        n: with_walls(sim, &fluid),
+        div,
+    }
 }
 
 /// n and ∇·u at the end of the step, for the error-compensating source: the walls' share
-/// of n carried from x* to the corrected positions to first order.
-pub(super) fn update_number_density_and_divergence<K: Kernel>(sim: &mut Simulation) {
-    let (x, xs) = (&sim.particles.position, &sim.workspace.scratch.x_star);
+/// of n carried from `x_star` to the corrected positions to first order.
+pub(super) fn update_number_density_and_divergence<K: Kernel>(
+    sim: &mut Simulation,
+    x_star: &[Vec2],
+) {
+    let x = &sim.particles.position;
     let u = &sim.particles.velocity;
     let (fluid, mut div) = fluid_density_and_divergence::<K>(sim, x, u);
     // the same divergence as the source's (with or without the wall's virtual points)
@@ -81,7 +96,7 @@ pub(super) fn update_number_density_and_divergence<K: Kernel>(sim: &mut Simulati
     sim.particles.number_density = fluid
         .par_iter()
         .enumerate()
-        .map(|(i, &n)| contacts.number_density_moved(i, n, x[i] - xs[i]))
+        .map(|(i, &n)| contacts.number_density_moved(i, n, x[i] - x_star[i]))
         .collect();
     sim.particles.number_density_rate = div;
 }

@@ -26,6 +26,7 @@ use crate::engine::kernel::Kernel;
 use crate::engine::operators::{corrected_gradient_row, hs_divergence_row, Cloud, GradientRow};
 use crate::engine::pressure::{self, SolveParams};
 use crate::engine::simulation::{SimError, Simulation};
+use crate::engine::workspace::PressureSystem;
 use crate::math::{Real, Vec2};
 use rayon::prelude::*;
 
@@ -48,10 +49,9 @@ struct Gradient {
 }
 
 impl Gradient {
-    fn new<K: Kernel>(sim: &Simulation, cloud: &Cloud) -> Self {
+    fn new<K: Kernel>(sim: &Simulation, cloud: &Cloud, neumann: &[Vec2]) -> Self {
         let prm = &sim.config.params;
         let contacts = &sim.workspace.contacts;
-        let neumann = &sim.workspace.scratch.neumann;
         let rows: Vec<(GradientRow, Vec2)> = (0..cloud.len())
             .into_par_iter()
             .map(|i| {
@@ -95,11 +95,14 @@ impl Gradient {
 }
 
 /// Correct the pressure solved with the HL Laplacian (unknown rows in
-/// `sim.workspace.scratch.solution`, not yet clipped) so that the rows of particles away from the
-/// free surface carry the exact projection; writes `sim.particles.pressure`. Returns the
+/// `system.solution`, not yet clipped; the others at their `dirichlet` value) so that
+/// the rows of particles away from the free surface carry the exact projection at
+/// `x_star`; writes `sim.particles.pressure` and `system.exact_correction`. Returns the
 /// GMRES iterations.
 pub(super) fn correct_to_exact_projection<K: Kernel>(
     sim: &mut Simulation,
+    (x_star, dirichlet): (&[Vec2], &[Real]),
+    system: &mut PressureSystem,
     blend: Real,
     dt: Real,
 ) -> Result<usize, SimError> {
@@ -107,11 +110,11 @@ pub(super) fn correct_to_exact_projection<K: Kernel>(
     let mut cache = std::mem::take(&mut sim.workspace.solver_cache);
     let prm = &sim.config.params;
     let (rho, re, c_div) = (prm.density, prm.re, prm.divergence_coefficient);
-    let s = &sim.workspace.scratch;
+    let s = &*system;
     let surface = &sim.particles.free_surface;
     let nb = &sim.workspace.neighbors;
     let contacts = &sim.workspace.contacts;
-    let x = &s.x_star;
+    let x = x_star;
     let u_star = &sim.particles.velocity;
     let rows = s.particle_of.len();
     // rows whose whole neighbourhood is unknown take the exact projection
@@ -127,7 +130,7 @@ pub(super) fn correct_to_exact_projection<K: Kernel>(
         .collect();
     // the exact projection's gradient and divergence rows are single-resolution
     let cloud = Cloud::new(x, nb, re);
-    let gradient = Gradient::new::<K>(sim, &cloud);
+    let gradient = Gradient::new::<K>(sim, &cloud, &s.neumann);
     // HS divergence coefficients of the exact rows: ∇·u_i = Σ_j e_ij·(u_j - u_i) + wall
     let divergence: Vec<Vec<(usize, Vec2)>> = s
         .particle_of
@@ -148,7 +151,7 @@ pub(super) fn correct_to_exact_projection<K: Kernel>(
         let mut p = if homogeneous {
             vec![0.0; x.len()]
         } else {
-            s.surface_pressure.clone()
+            dirichlet.to_vec()
         };
         for (row, &i) in s.particle_of.iter().enumerate() {
             p[i as usize] = unknowns[row];
@@ -232,7 +235,7 @@ pub(super) fn correct_to_exact_projection<K: Kernel>(
         reason: format!("exact projection: {e}"),
     })?;
     let clip = sim.config.method.clip_negative_pressure;
-    let s = &mut sim.workspace.scratch;
+    let s = system;
     let p = &mut sim.particles.pressure;
     s.exact_correction.clear();
     s.exact_correction.resize(p.len(), 0.0);

@@ -4,6 +4,7 @@
 use super::walls::KernelWeights;
 use crate::engine::kernel::Kernel;
 use crate::engine::operators::{vector_laplacian_sums, Cloud};
+use crate::engine::particles::Particles;
 use crate::engine::resolution::Scales;
 use crate::engine::simulation::{Simulation, WallLoad};
 use crate::math::{vec2, Real, Vec2};
@@ -12,25 +13,22 @@ use rayon::prelude::*;
 /// Gravity and (when nu > 0) viscosity: the fluid pairs' viscous Laplacian
 /// (`operators::vector_laplacian_sums`, the case's form and Laplacian weight) plus the
 /// walls' mirror terms (`WallContacts::viscous_mirror`, no slip or free slip), times
-/// nu and the lattice coefficient.
+/// nu and the lattice coefficient. The particles' velocity becomes u*; returns u^n.
 pub(super) fn apply_explicit_forces<K: Kernel>(
     sim: &mut Simulation,
     weights: &KernelWeights<K>,
     dt: Real,
     loads: &mut [WallLoad],
-) {
+) -> Vec<Vec2> {
     let g = vec2(sim.config.params.gravity);
     let nu = sim.config.params.viscosity;
-    sim.workspace
-        .scratch
-        .u_start
-        .clone_from(&sim.particles.velocity);
+    let u_start = sim.particles.velocity.clone();
     if nu <= 0.0 {
         sim.particles
             .velocity
             .par_iter_mut()
             .for_each(|u| *u += g * dt);
-        return;
+        return u_start;
     }
     let c = sim.config.params.laplacian_coefficient;
     let (x, u) = (&sim.particles.position, &sim.particles.velocity);
@@ -79,14 +77,14 @@ pub(super) fn apply_explicit_forces<K: Kernel>(
             }
         }
     }
+    u_start
 }
 
-pub(super) fn predict_positions(sim: &mut Simulation, dt: Real) {
-    let p = &sim.particles;
-    sim.workspace.scratch.x_star = p
-        .position
+/// x* = x + dt u*.
+pub(super) fn predicted_positions(p: &Particles, dt: Real) -> Vec<Vec2> {
+    p.position
         .par_iter()
         .zip(p.velocity.par_iter())
         .map(|(x, u)| x + u * dt)
-        .collect();
+        .collect()
 }

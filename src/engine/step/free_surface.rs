@@ -6,11 +6,26 @@ use crate::engine::simulation::Simulation;
 use crate::math::{vec2, Real, Vec2};
 use rayon::prelude::*;
 
+/// What the free-surface stage gives the pressure equation, per particle.
+pub(super) struct SurfaceValues {
+    /// Dirichlet value of each free-surface particle, and the penalty's target of each
+    /// graded one (0 elsewhere).
+    pub(super) dirichlet: Vec<Real>,
+    /// Surface share s in (0, 1) of a particle at the edge of the graded surface test,
+    /// 0 elsewhere (`Scheme::soft_surface`).
+    pub(super) softness: Vec<Real>,
+}
+
 /// Free surface: n* < beta n0, confirmed by a one-sided neighbourhood
 /// (|Σ w r/r²| l0 / n above `surface_asymmetry`); below 0.8 n0 always. With the graded
 /// test a particle near the edge of both is neither: it gets a surface share
-/// (`surface_share`) that the pressure equation turns into a penalty.
-pub(super) fn detect_free_surface<K: Kernel>(sim: &mut Simulation) {
+/// (`surface_share`) that the pressure equation turns into a penalty. Writes the
+/// particles' `free_surface` flags.
+pub(super) fn detect_free_surface<K: Kernel>(
+    sim: &mut Simulation,
+    x_star: &[Vec2],
+    n_star: &[Real],
+) -> SurfaceValues {
     let contacts = &sim.workspace.contacts;
     let (n0, re, l0) = (
         sim.config.params.n0,
@@ -18,11 +33,9 @@ pub(super) fn detect_free_surface<K: Kernel>(sim: &mut Simulation) {
         sim.config.params.l0,
     );
     let scales = sim.scales();
-    let cloud =
-        Cloud::new(&sim.workspace.scratch.x_star, &sim.workspace.neighbors, re).with_scales(scales);
+    let cloud = Cloud::new(x_star, &sim.workspace.neighbors, re).with_scales(scales);
     let beta = sim.config.method.free_surface.threshold;
     let asym_limit = sim.config.method.free_surface.asymmetry;
-    let n_star = &sim.workspace.scratch.n_star;
     let offset = sim.config.method.free_surface.offset;
     let rho_g = vec2(sim.config.params.gravity) * sim.config.params.density;
     // (is surface, Dirichlet value): the surface lies half a spacing beyond the particle,
@@ -66,9 +79,12 @@ pub(super) fn detect_free_surface<K: Kernel>(sim: &mut Simulation) {
         })
         .collect();
     sim.particles.free_surface = flags.iter().map(|f| f.0).collect();
-    sim.workspace.scratch.surface_pressure = flags.iter().map(|f| f.1).collect();
-    sim.workspace.scratch.surface_softness = flags.iter().map(|f| f.2).collect();
-    release_isolated_clusters(sim);
+    let mut values = SurfaceValues {
+        dirichlet: flags.iter().map(|f| f.1).collect(),
+        softness: flags.iter().map(|f| f.2).collect(),
+    };
+    release_isolated_clusters(sim, x_star, &mut values.dirichlet);
+    values
 }
 
 /// The graded test's ramps: the surface share falls from 1 at n* = `SOFT_DENSITY_LOW`
@@ -111,12 +127,8 @@ pub(super) const ENCLOSED_PAIR: usize = 2;
 /// it touches, becomes free surface (p = 0, as spray is). The search
 /// starts only from particles touching a wall with fewer than half the lattice's
 /// neighbours, and stops past the limit, so it costs nothing in the bulk.
-pub(super) fn release_isolated_clusters(sim: &mut Simulation) {
-    let (x, nb, contacts) = (
-        &sim.workspace.scratch.x_star,
-        &sim.workspace.neighbors,
-        &sim.workspace.contacts,
-    );
+fn release_isolated_clusters(sim: &mut Simulation, x: &[Vec2], dirichlet: &mut [Real]) {
+    let (nb, contacts) = (&sim.workspace.neighbors, &sim.workspace.contacts);
     let surface = &sim.particles.free_surface;
     let (re, re_lap) = (sim.config.params.re, sim.config.params.re_lap);
     let lattice_neighbours = sim.config.params.lattice.neighbours;
@@ -161,7 +173,7 @@ pub(super) fn release_isolated_clusters(sim: &mut Simulation) {
     }
     for i in released {
         sim.particles.free_surface[i] = true;
-        sim.workspace.scratch.surface_pressure[i] = 0.0;
+        dirichlet[i] = 0.0;
     }
 }
 

@@ -21,7 +21,8 @@
 //!
 //! The stages live in the sibling files, one per stage group: `explicit`, `density`
 //! (neighbours, number density, divergence), `free_surface`, `pressure_equation`,
-//! `exact` (the optional exact projection), `correction`, `spacing`, `bookkeeping`.
+//! `exact` (the optional exact projection), `correction`, `spacing`, `bookkeeping`;
+//! the step guard's rollback in `guard`.
 
 mod bookkeeping;
 mod correction;
@@ -29,6 +30,7 @@ mod density;
 mod exact;
 mod explicit;
 mod free_surface;
+mod guard;
 mod pressure_equation;
 mod spacing;
 mod walls;
@@ -37,9 +39,11 @@ use super::config::Projection;
 use super::kernel::Kernel;
 use super::simulation::{Attempt, SimError, Simulation, StageTimes, StepInfo, WallLoad};
 use super::walls::WallContacts;
+use super::workspace::PressureSystem;
 use crate::case::WallLoadKind;
 use crate::math::Real;
 use crate::with_kernel;
+use guard::Rollback;
 use std::time::Instant;
 use walls::{placed_walls, wall_kernels, KernelWeights};
 
@@ -93,103 +97,113 @@ fn initialize<K: Kernel>(sim: &mut Simulation) {
 }
 
 /// The step, stage by stage. With `limit`, the step stops before the correction when a
-/// particle would move farther than `limit` and leaves the state as it found it.
+/// particle would move farther than `limit` and leaves the state as it found it. The
+/// pressure system's buffers are lent to the stages and returned whatever the outcome.
 fn step<K: Kernel>(
     sim: &mut Simulation,
     dt: Real,
     limit: Option<Real>,
 ) -> Result<Attempt, SimError> {
+    let mut system = std::mem::take(&mut sim.workspace.system);
     let mut times = StageTimes::default();
+    let attempt = stages::<K>(sim, &mut system, &mut times, dt, limit);
+    sim.workspace.system = system;
+    sim.stats.stage_times += times;
+    attempt
+}
+
+/// The stages in order. Each takes what it reads and returns what it produces, besides
+/// the particles and the lists in `sim`: u^n and x* (explicit), n* and ∇·u*
+/// (density), the surface values (free surface), the pressure system (assembly,
+/// solve), ∇p (correction).
+fn stages<K: Kernel>(
+    sim: &mut Simulation,
+    system: &mut PressureSystem,
+    times: &mut StageTimes,
+    dt: Real,
+    limit: Option<Real>,
+) -> Result<Attempt, SimError> {
     let weights = KernelWeights::<K>::new(sim);
     // loads of this step, one per wall object, accumulated by every stage with a wall term
     let mut loads = vec![WallLoad::default(); sim.walls.len()];
-    // what the stages before the correction overwrite, for a step the guard turns down
-    let restore = limit.map(|_| {
-        (
-            sim.particles.pressure.clone(),
-            sim.particles.free_surface.clone(),
-        )
-    });
+    let mut rollback = limit.map(|_| Rollback::save(sim));
 
-    timed(&mut times.explicit_forces, || {
+    let (u_start, x_star) = timed(&mut times.explicit_forces, || {
         // u* = u + dt (g + nu ∇²u), Sun et al. (2022) eq. 9; x* = x + dt u*, eq. 10
-        explicit::apply_explicit_forces::<K>(sim, &weights, dt, &mut loads);
-        explicit::predict_positions(sim, dt);
+        let u_start = explicit::apply_explicit_forces::<K>(sim, &weights, dt, &mut loads);
+        (u_start, explicit::predicted_positions(&sim.particles, dt))
     });
-    // neighbours at x* (cell grid, counting sort)
-    // (the lists of the last step are kept until the step is accepted: the explicit
-    // stage of a repeated step reads them)
+    // neighbours at x* (cell grid, counting sort), and the walls at their predicted pose
+    // with each particle's contacts; the guard keeps the last step's lists
     let last_neighbors = timed(&mut times.neighbors, || {
-        let list = density::neighbor_list(sim, &sim.workspace.scratch.x_star);
+        let list = density::neighbor_list(sim, &x_star);
         std::mem::replace(&mut sim.workspace.neighbors, list)
     });
-    // the walls at their predicted pose and each particle's contacts with them
-    let (walls, last_contacts) = timed(&mut times.walls, || {
+    let walls = timed(&mut times.walls, || {
         let walls = placed_walls(sim, dt);
         let kernels = wall_kernels(sim);
-        let contacts = WallContacts::build(
-            &sim.workspace.scratch.x_star,
-            &walls,
-            &kernels,
-            &weights,
-            sim.scales(),
-        );
-        (
-            walls,
-            std::mem::replace(&mut sim.workspace.contacts, contacts),
-        )
+        let contacts = WallContacts::build(&x_star, &walls, &kernels, &weights, sim.scales());
+        let last_contacts = std::mem::replace(&mut sim.workspace.contacts, contacts);
+        if let Some(rollback) = rollback.as_mut() {
+            rollback.keep_lists(last_neighbors, last_contacts);
+        }
+        walls
     });
-    timed(&mut times.number_density, || {
+    let (at_star, mut surface) = timed(&mut times.number_density, || {
         // n* with the wall lattice (Harada et al. 2008) and the source's ∇·u*
-        density::compute_number_density_and_divergence::<K>(sim);
+        let at_star = density::at_prediction::<K>(sim, &x_star, &u_start);
         // n* < beta n0 confirmed by a one-sided neighbourhood (Sun et al. 2022 §2.3)
-        free_surface::detect_free_surface::<K>(sim);
+        let surface = free_surface::detect_free_surface::<K>(sim, &x_star, &at_star.n);
+        (at_star, surface)
     });
     timed(&mut times.assemble, || {
         // the Neumann extrapolation gradient of every wall contact (docs/method.md, walls)
-        pressure_equation::compute_neumann_gradients(sim, dt);
+        system.neumann = pressure_equation::neumann_gradients(sim, &u_start, dt);
         // source HS + ECS (Ikari, Khayyer & Gotoh 2015 eqs. 3, 10-11) and HL rows (eq. 9)
-        pressure_equation::assemble_pressure_equation::<K>(sim, &weights, dt);
+        pressure_equation::assemble_pressure_equation::<K>(
+            sim,
+            &weights,
+            &x_star,
+            &at_star,
+            &mut surface,
+            system,
+            dt,
+        );
     });
+    drop(at_star);
     let (iterations, residual) = timed(&mut times.solve, || -> Result<_, SimError> {
-        let (mut iterations, residual) = pressure_equation::solve_pressure(sim)?;
+        let (mut iterations, residual) = pressure_equation::solve_pressure(sim, system, &surface)?;
         if let Projection::Exact { blend } = sim.config.method.projection {
-            iterations += exact::correct_to_exact_projection::<K>(sim, blend, dt)?;
+            let at = (&x_star[..], &surface.dirichlet[..]);
+            iterations += exact::correct_to_exact_projection::<K>(sim, at, system, blend, dt)?;
         }
         Ok((iterations, residual))
     })?;
     // ∇p of every particle (fluid neighbours and virtual wall points)
     let gradient = timed(&mut times.correct, || {
-        correction::pressure_gradients::<K>(sim)
+        correction::pressure_gradients::<K>(sim, &x_star, &system.neumann)
     });
-    if let Some(limit) = limit {
+    if let Some(rollback) = rollback {
         // the step guard: dt was set from the speeds at the start of the step, and a
         // jet-root particle the correction accelerates several-fold would move more
         // than a spacing; x^{n+1} - x^n = dt u^{n+1}
         let moved = correction::largest_displacement(sim, &gradient, dt);
-        if moved > limit {
-            let u_start = &sim.workspace.scratch.u_start;
-            sim.particles.velocity.clone_from(u_start);
-            if let Some((pressure, free_surface)) = restore {
-                sim.particles.pressure = pressure;
-                sim.particles.free_surface = free_surface;
-            }
-            sim.workspace.neighbors = last_neighbors;
-            sim.workspace.contacts = last_contacts;
+        if moved > limit.unwrap_or(Real::INFINITY) {
+            rollback.restore(sim, &u_start);
             sim.stats.rejected_steps += 1;
-            sim.stats.stage_times += times;
             return Ok(Attempt::Rejected { dt, moved });
         }
     }
     timed(&mut times.correct, || {
         // u^{n+1} = u* - dt/rho ∇p, x^{n+1} = x* + dt (u^{n+1} - u*) (Sun et al. 2022 eqs. 11-12);
         // the wall loads
-        correction::correct_velocity_and_position::<K>(sim, &walls, &gradient, dt, &mut loads);
+        let at = (&x_star[..], &system.neumann[..]);
+        correction::correct_velocity_and_position::<K>(sim, &walls, at, &gradient, dt, &mut loads);
     });
     timed(&mut times.spacing, || {
         // the filter before the safety net, which must have the last word on wall approach
         if let Some(eps) = sim.config.method.velocity_filter {
-            spacing::filter_velocity::<K>(sim, eps);
+            spacing::filter_velocity::<K>(sim, &x_star, eps);
         }
         if !sim.config.control.damping.is_empty() {
             spacing::absorb_waves(sim, dt);
@@ -201,7 +215,7 @@ fn step<K: Kernel>(
     });
     let (removed, max_speed) = timed(&mut times.bookkeeping, || {
         // n and ∇·u at the end of the step, for the error-compensating source
-        density::update_number_density_and_divergence::<K>(sim);
+        density::update_number_density_and_divergence::<K>(sim, &x_star);
         sim.loads = total_loads(loads, sim.config.method.wall_load);
         for wall in &mut sim.walls {
             wall.state = wall.state.advanced(dt);
@@ -209,18 +223,17 @@ fn step<K: Kernel>(
         sim.time += dt;
         sim.steps += 1;
         sim.stats.particle_steps += sim.particles.len() as u64;
-        sim.acceleration_dt = bookkeeping::acceleration_limited_dt(sim, dt);
+        sim.acceleration_dt = bookkeeping::acceleration_limited_dt(sim, &u_start, dt);
         sim.stats.total_solver_iterations += iterations as u64;
         let removed =
             bookkeeping::remove_particles_outside_domain(sim) + bookkeeping::remove_runaways(sim);
         bookkeeping::check_health(sim).map(|max_speed| (removed, max_speed))
     })?;
-    sim.stats.stage_times += times;
     Ok(Attempt::Taken(StepInfo {
         dt,
         solver_iterations: iterations,
         solver_residual: residual,
-        unknowns: sim.workspace.scratch.matrix.n,
+        unknowns: system.matrix.n,
         max_speed,
         removed,
     }))

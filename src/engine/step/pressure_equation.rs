@@ -1,6 +1,8 @@
 //! The pressure Poisson equation: Neumann wall gradients, source, Laplacian rows,
 //! assembly and solve.
 
+use super::density::AtPrediction;
+use super::free_surface::SurfaceValues;
 use super::walls::KernelWeights;
 use crate::case::WallKinematics;
 use crate::engine::config::{Projection, Source};
@@ -12,6 +14,7 @@ use crate::engine::pressure::{self, concat_into, Entries, SolveParams};
 use crate::engine::resolution::Scales;
 use crate::engine::simulation::{SimError, Simulation};
 use crate::engine::walls::WallContact;
+use crate::engine::workspace::PressureSystem;
 use crate::math::{vec2, Real, Vec2};
 use rayon::prelude::*;
 
@@ -20,7 +23,7 @@ use rayon::prelude::*;
 /// "neumann"` it also carries the particle's approach to the wall left over from the
 /// last step, (rho/dt) min(0, (u_i - u_w)·n) n (zero when the fluid followed the wall),
 /// so the virtual pressure behind the wall rises to push the particle back.
-pub(super) fn compute_neumann_gradients(sim: &mut Simulation, dt: Real) {
+pub(super) fn neumann_gradients(sim: &Simulation, u_start: &[Vec2], dt: Real) -> Vec<Vec2> {
     let rho = sim.config.params.density;
     let g = vec2(sim.config.params.gravity);
     let extrapolate = sim.config.method.source != Source::Pnd;
@@ -33,11 +36,10 @@ pub(super) fn compute_neumann_gradients(sim: &mut Simulation, dt: Real) {
         }
     };
     if sim.config.method.wall_kinematics == WallKinematics::Source || !extrapolate {
-        sim.workspace.scratch.neumann = contacts.contacts.par_iter().map(base).collect();
-        return;
+        return contacts.contacts.par_iter().map(base).collect();
     }
-    let u = &sim.workspace.scratch.u_start;
-    sim.workspace.scratch.neumann = (0..u.len())
+    let u = u_start;
+    (0..u.len())
         .into_par_iter()
         .flat_map_iter(|i| {
             contacts.of(i).iter().map(move |c| {
@@ -45,18 +47,25 @@ pub(super) fn compute_neumann_gradients(sim: &mut Simulation, dt: Real) {
                 base(c) + c.normal * (rho / dt * approach)
             })
         })
-        .collect();
+        .collect()
 }
 
+/// The rows of the pressure equation at `x_star` into `system` (its `neumann` already
+/// set), with the source from n* and ∇·u* and the surface values of `surface`; a
+/// particle with no Laplacian neighbour becomes free surface (flag and value).
 pub(super) fn assemble_pressure_equation<K: Kernel>(
     sim: &mut Simulation,
     weights: &KernelWeights<K>,
+    x_star: &[Vec2],
+    at_star: &AtPrediction,
+    surface_values: &mut SurfaceValues,
+    system: &mut PressureSystem,
     dt: Real,
 ) {
     let np = sim.particles.len();
     let p = &sim.config.params;
     let (rho, n0, c_lap) = (p.density, p.n0, p.laplacian_coefficient);
-    let x = &sim.workspace.scratch.x_star;
+    let x = x_star;
     let nb = &sim.workspace.neighbors;
     let scales = Scales::new(&sim.particles.scale, sim.config.multi_resolution);
     let cloud = Cloud::new(x, nb, p.re_lap).with_scales(scales);
@@ -70,13 +79,13 @@ pub(super) fn assemble_pressure_equation<K: Kernel>(
         .collect();
     for i in isolated {
         sim.particles.free_surface[i] = true;
-        sim.workspace.scratch.surface_pressure[i] = 0.0;
+        surface_values.dirichlet[i] = 0.0;
     }
-    let dirichlet = &sim.workspace.scratch.surface_pressure;
+    let dirichlet = &surface_values.dirichlet;
     let surface = &sim.particles.free_surface;
     // a particle at the edge of the graded surface test: alpha (p_i - p_surface) with
     // alpha = s / (1 - s) times the row's diagonal (`Scheme::soft_surface`)
-    let softness = &sim.workspace.scratch.surface_softness;
+    let softness = &surface_values.softness;
     let soften = |i: usize, diag: &mut Real, b: &mut Real| {
         let s = softness.get(i).copied().unwrap_or(0.0);
         if s > 0.0 {
@@ -86,8 +95,8 @@ pub(super) fn assemble_pressure_equation<K: Kernel>(
         }
     };
     // the previous step's index maps, refilled (no allocation at a steady size)
-    let mut unknown_of = std::mem::take(&mut sim.workspace.scratch.unknown_of);
-    let mut particle_of = std::mem::take(&mut sim.workspace.scratch.particle_of);
+    let mut unknown_of = std::mem::take(&mut system.unknown_of);
+    let mut particle_of = std::mem::take(&mut system.particle_of);
     unknown_of.clear();
     unknown_of.resize(np, u32::MAX);
     particle_of.clear();
@@ -98,10 +107,10 @@ pub(super) fn assemble_pressure_equation<K: Kernel>(
         }
     }
     // source term S of ∇²p - (rho alpha / dt²) p = S
-    let div_star = &sim.workspace.scratch.div_star;
+    let div_star = &at_star.div;
     let n_prev = &sim.particles.number_density;
     let div_prev = &sim.particles.number_density_rate;
-    let n_star = &sim.workspace.scratch.n_star;
+    let n_star = &at_star.n;
     // the variant chosen once per step, each its own loop
     let by_particle = |f: &(dyn Fn(usize) -> Real + Sync)| -> Vec<Real> {
         (0..np).into_par_iter().map(f).collect()
@@ -136,7 +145,7 @@ pub(super) fn assemble_pressure_equation<K: Kernel>(
     let kind = sim.config.method.laplacian;
     let operator_rows = !kind.is_symmetric();
     let lattice = Normalisation::Reference(p.lattice_lap);
-    let neumann = &sim.workspace.scratch.neumann;
+    let neumann = &system.neumann;
     let nu = particle_of.len();
     // the fill n*/n0 of each neighbourhood, floored (`Scheme::laplacian_fill_floor`);
     // none when disabled, so the default pays nothing per pair
@@ -230,7 +239,7 @@ pub(super) fn assemble_pressure_equation<K: Kernel>(
                 .sum()
         })
         .collect();
-    let mut m = std::mem::take(&mut sim.workspace.scratch.matrix);
+    let mut m = std::mem::take(&mut system.matrix);
     let rhs_parts = m.fill_in_place(&bounds, |c, out| {
         let rows = rows_of(c);
         let mut lens = Vec::with_capacity(rows.len());
@@ -242,31 +251,35 @@ pub(super) fn assemble_pressure_equation<K: Kernel>(
         }
         (lens, rhs)
     });
-    let mut rhs = std::mem::take(&mut sim.workspace.scratch.rhs);
+    let mut rhs = std::mem::take(&mut system.rhs);
     let rhs_parts: Vec<&[Real]> = rhs_parts.iter().map(|b| &b[..]).collect();
     concat_into(&mut rhs, &rhs_parts);
     // warm start from the last pressures
-    let mut solution = std::mem::take(&mut sim.workspace.scratch.solution);
-    solution.clear();
-    solution.extend(
+    system.solution.clear();
+    system.solution.extend(
         particle_of
             .iter()
             .map(|&i| sim.particles.pressure[i as usize]),
     );
-    sim.workspace.scratch.solution = solution;
-    sim.workspace.scratch.matrix = m;
-    sim.workspace.scratch.rhs = rhs;
-    sim.workspace.scratch.unknown_of = unknown_of;
-    sim.workspace.scratch.particle_of = particle_of;
-    sim.workspace.scratch.source_extra = source_extra;
+    system.matrix = m;
+    system.rhs = rhs;
+    system.unknown_of = unknown_of;
+    system.particle_of = particle_of;
+    system.source_extra = source_extra;
 }
 
-pub(super) fn solve_pressure(sim: &mut Simulation) -> Result<(usize, Real), SimError> {
+/// Solve `system` (its solution stays in it, unclipped) and set the particles' pressure:
+/// the solution on the unknowns, the surface values on the others.
+pub(super) fn solve_pressure(
+    sim: &mut Simulation,
+    system: &mut PressureSystem,
+    surface_values: &SurfaceValues,
+) -> Result<(usize, Real), SimError> {
     let params = SolveParams {
         tolerance: sim.config.method.solver.tolerance,
         max_iterations: sim.config.method.solver.max_iterations,
     };
-    let s = &mut sim.workspace.scratch;
+    let s = system;
     let policy = pressure::ReusePolicy {
         rebuild_interval: sim.config.method.solver.amg_rebuild_interval,
         // Keep, not Galerkin: recomputing R A P saved only a quarter of the setup
@@ -295,7 +308,7 @@ pub(super) fn solve_pressure(sim: &mut Simulation) -> Result<(usize, Real), SimE
     })?;
     let clip = sim.config.method.clip_negative_pressure;
     let p = &mut sim.particles.pressure;
-    p.copy_from_slice(&s.surface_pressure);
+    p.copy_from_slice(&surface_values.dirichlet);
     for (row, &i) in s.particle_of.iter().enumerate() {
         let v = s.solution[row];
         p[i as usize] = if clip { v.max(0.0) } else { v };

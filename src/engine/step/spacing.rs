@@ -80,14 +80,14 @@ pub(super) fn keep_particles_apart(
 }
 
 /// The velocity filter (`scheme.velocity_filter`): u_i += eps Σ_j w_ij (u_j - u_i) / n0
-/// over the fluid neighbours at x* (the pair sum of the classic vector Laplacian at r_e,
+/// over the fluid neighbours at `x_star` (the pair sum of the classic vector Laplacian at r_e,
 /// `operators::vector_laplacian_sums`). The pair weights are symmetric, so the fluid's
 /// momentum is unchanged; a smooth field changes by O(eps l0² ∇²u) per step, while the
 /// odd-even mode (neighbours moving in opposite directions, invisible to the divergence
 /// of the PPE source and to the gradient) loses a share of order eps every step.
-pub(super) fn filter_velocity<K: Kernel>(sim: &mut Simulation, eps: Real) {
+pub(super) fn filter_velocity<K: Kernel>(sim: &mut Simulation, x_star: &[Vec2], eps: Real) {
     let (re, n0) = (sim.config.params.re, sim.config.params.n0);
-    let x = &sim.workspace.scratch.x_star;
+    let x = x_star;
     let nb = &sim.workspace.neighbors;
     // a particle created after the last neighbour search has no list and no change
     let cloud = Cloud::new(&x[..nb.len().min(x.len())], nb, re).with_scales(sim.scales());
