@@ -14,7 +14,7 @@
 //! the number of threads.
 
 use super::{CsrMatrix, RowChunk};
-use crate::math::{deterministic_sum, Real};
+use crate::math::{deterministic_sum, deterministic_sum_mut, Real};
 use nalgebra::{DMatrix, DVector};
 use rayon::prelude::*;
 use std::borrow::Cow;
@@ -661,6 +661,31 @@ impl Hierarchy {
         );
     }
 
+    /// [`apply`](Self::apply), returning r·z (bit for bit the sum CG's `dot` gives)
+    /// from the pass that writes z: the V-cycle's last pass copies the smoothed iterate
+    /// into z, so CG's r·z needs no pass of its own.
+    pub(crate) fn apply_dot(&mut self, a: &CsrMatrix, r: &[Real], z: &mut [Real]) -> Real {
+        // the fixed-chunk sum gives the same bits on one thread or two
+        let parallel = z.len() >= PARALLEL_ROWS;
+        if self.levels.is_empty() {
+            self.coarsest.solve(r, z);
+            return deterministic_sum_mut(z, parallel, |i, zi| r[i] * *zi);
+        }
+        smoothed_into_work(
+            &self.levels,
+            &mut self.work,
+            &mut self.coarsest,
+            Some(a),
+            r,
+            z,
+        );
+        let res = &self.work[0].res;
+        deterministic_sum_mut(z, parallel, |i, zi| {
+            *zi = res[i];
+            r[i] * *zi
+        })
+    }
+
     /// Unknowns per level below the finest, then the last.
     fn coarse_sizes(&self) -> Vec<usize> {
         let mut s: Vec<usize> = self.levels.iter().skip(1).map(|l| l.a.n).collect();
@@ -736,10 +761,25 @@ fn cycle(
     b: &[Real],
     x: &mut [Real],
 ) {
-    let Some((level, rest)) = levels.split_first() else {
+    if levels.is_empty() {
         coarsest.solve(b, x);
         return;
-    };
+    }
+    smoothed_into_work(levels, work, coarsest, fine, b, x);
+    x.copy_from_slice(&work[0].res);
+}
+
+/// The V-cycle of [`cycle`] up to its post-smoothing, whose result it leaves in
+/// `work[0].res` (`x` holds the iterate before it); `levels` is not empty.
+fn smoothed_into_work(
+    levels: &[Level],
+    work: &mut [Work],
+    coarsest: &mut Coarsest,
+    fine: Option<&CsrMatrix>,
+    b: &[Real],
+    x: &mut [Real],
+) {
+    let (level, rest) = levels.split_first().expect("a level to smooth");
     let (w, rest_work) = work.split_first_mut().expect("one work entry per level");
     let Work { res, bc, xc } = w;
     let (a, s) = (fine.unwrap_or(&level.a), &level.smoother);
@@ -763,7 +803,6 @@ fn cycle(
         let x: &[Real] = x;
         for_rows(res, |i, ri| *ri = x[i] + s[i] * (b[i] - a.row_dot(i, x)));
     }
-    x.copy_from_slice(res);
 }
 
 #[cfg(test)]

@@ -271,19 +271,25 @@ pub(crate) fn pcg_with(
     b: &[Real],
     x: &mut [Real],
     params: SolveParams,
-    precondition: impl FnMut(&[Real], &mut [Real]),
+    mut precondition: impl FnMut(&[Real], &mut [Real]),
 ) -> Result<SolveInfo, SolveError> {
-    pcg_in(a, b, x, params, &mut CgVectors::default(), precondition)
+    let mut work = CgVectors::default();
+    pcg_in(a, b, x, params, &mut work, |r, z| {
+        precondition(r, z);
+        dot(r, z)
+    })
 }
 
-/// [`pcg_with`] in the work vectors `work`.
+/// [`pcg_with`] in the work vectors `work`, with a preconditioner that also returns
+/// r·z, bit for bit as [`dot`] gives it (so that it can fuse the sum into its last
+/// pass).
 pub(crate) fn pcg_in(
     a: &CsrMatrix,
     b: &[Real],
     x: &mut [Real],
     params: SolveParams,
     work: &mut CgVectors,
-    mut precondition: impl FnMut(&[Real], &mut [Real]),
+    mut precondition: impl FnMut(&[Real], &mut [Real]) -> Real,
 ) -> Result<SolveInfo, SolveError> {
     let n = a.n;
     if n == 0 {
@@ -302,9 +308,8 @@ pub(crate) fn pcg_in(
     // r = b - A x
     a.mul(x, r);
     for_each_index(r, |i, ri| *ri = b[i] - *ri);
-    precondition(r, z);
+    let mut rz = precondition(r, z);
     p.copy_from_slice(z);
-    let mut rz = dot(r, z);
     let mut rel = dot(r, r).sqrt() / bnorm;
     let mut it = 0;
     while rel > params.tolerance {
@@ -340,8 +345,7 @@ pub(crate) fn pcg_in(
             for_each_index(x, |i, xi| *xi += alpha * p[i]);
             break;
         }
-        precondition(r, z);
-        let rz_new = dot(r, z);
+        let rz_new = precondition(r, z);
         let beta = rz_new / rz;
         rz = rz_new;
         update_iterate(x, p, z, alpha, beta);

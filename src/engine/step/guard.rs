@@ -28,8 +28,8 @@ impl Rollback {
     }
 
     /// Keeps the last step's lists once the step has replaced them.
-    pub(super) fn keep_lists(&mut self, neighbors: NeighborList, contacts: WallContacts) {
-        self.lists = Some((neighbors, contacts));
+    pub(super) fn keep_lists(&mut self, lists: (NeighborList, WallContacts)) {
+        self.lists = Some(lists);
     }
 
     /// Puts the state back as the step found it, velocity `u_start`.
