@@ -126,7 +126,7 @@ fn stages<K: Kernel>(
     let weights = KernelWeights::<K>::new(sim);
     // loads of this step, one per wall object, accumulated by every stage with a wall term
     let mut loads = vec![WallLoad::default(); sim.walls.len()];
-    let mut rollback = limit.map(|_| Rollback::save(sim));
+    let rollback = limit.map(|_| Rollback::save(sim));
 
     let (u_start, x_star) = timed(&mut times.explicit_forces, || {
         // u* = u + dt (g + nu ∇²u), Sun et al. (2022) eq. 9; x* = x + dt u*, eq. 10
@@ -134,28 +134,22 @@ fn stages<K: Kernel>(
         (u_start, explicit::predicted_positions(&sim.particles, dt))
     });
     // neighbours at x* (cell grid, counting sort), and the walls at their predicted pose
-    // with each particle's contacts; the guard keeps the last step's lists
+    // with each particle's contacts; the last step's lists are kept to the end of the
+    // step: a repeated step's explicit stage reads them, and freed at once they changed
+    // where the later stages' buffers went (the step at 160k took 77.0 against 74.9 ms,
+    // bench --scaling, medians of 12)
     let last_neighbors = timed(&mut times.neighbors, || {
         let list = density::neighbor_list(sim, &x_star);
         std::mem::replace(&mut sim.workspace.neighbors, list)
     });
-    let (walls, _kept) = timed(&mut times.walls, || {
+    let (walls, last_contacts) = timed(&mut times.walls, || {
         let walls = placed_walls(sim, dt);
         let kernels = wall_kernels(sim);
         let contacts = WallContacts::build(&x_star, &walls, &kernels, &weights, sim.scales());
-        let last_contacts = std::mem::replace(&mut sim.workspace.contacts, contacts);
-        // the last lists live to the end of the step even without the guard: freed
-        // here, the freed block changed where the later stages' buffers went, and the
-        // step at 160k took 77.0 against 74.9 ms (bench --scaling, medians of 12)
-        let last = (last_neighbors, last_contacts);
-        let kept = match rollback.as_mut() {
-            Some(rollback) => {
-                rollback.keep_lists(last);
-                None
-            }
-            None => Some(last),
-        };
-        (walls, kept)
+        (
+            walls,
+            std::mem::replace(&mut sim.workspace.contacts, contacts),
+        )
     });
     let (at_star, mut surface) = timed(&mut times.number_density, || {
         // n* with the wall lattice (Harada et al. 2008) and the source's ∇·u*
@@ -198,7 +192,7 @@ fn stages<K: Kernel>(
         let moved = correction::largest_displacement(sim, &gradient, dt);
         if moved > limit {
             if let Some(rollback) = rollback {
-                rollback.restore(sim, &u_start);
+                rollback.restore(sim, &u_start, (last_neighbors, last_contacts));
             }
             sim.stats.rejected_steps += 1;
             return Ok(Attempt::Rejected { dt, moved });
