@@ -172,14 +172,10 @@ impl Ic0 {
     }
 }
 
-/// What both Krylov solvers start from: ||b|| and r = b - A x. `None` when there is
-/// nothing to solve (empty system, or b = 0 and then x = 0).
-struct Start {
-    bnorm: Real,
-    r: Vec<Real>,
-}
-
-fn start(a: &CsrMatrix, b: &[Real], x: &mut [Real]) -> Option<Start> {
+/// What both Krylov solvers start from: r = b - A x, written into `r` (resized to the
+/// system), and ||b||. `None` when there is nothing to solve (empty system, or b = 0
+/// and then x = 0).
+fn start(a: &CsrMatrix, b: &[Real], x: &mut [Real], r: &mut Vec<Real>) -> Option<Real> {
     if a.n == 0 {
         return None;
     }
@@ -188,10 +184,11 @@ fn start(a: &CsrMatrix, b: &[Real], x: &mut [Real]) -> Option<Start> {
         x.iter_mut().for_each(|v| *v = 0.0);
         return None;
     }
-    let mut r = vec![0.0; a.n];
-    a.mul(x, &mut r);
-    for_each_index(&mut r, |i, ri| *ri = b[i] - *ri);
-    Some(Start { bnorm, r })
+    r.clear();
+    r.resize(a.n, 0.0);
+    a.mul(x, r);
+    for_each_index(r, |i, ri| *ri = b[i] - *ri);
+    Some(bnorm)
 }
 
 fn inverse_diagonal(a: &CsrMatrix) -> Vec<Real> {
@@ -292,22 +289,14 @@ pub(crate) fn pcg_in(
     mut precondition: impl FnMut(&[Real], &mut [Real]) -> Real,
 ) -> Result<SolveInfo, SolveError> {
     let n = a.n;
-    if n == 0 {
-        return Ok(SolveInfo::default());
-    }
-    let bnorm = dot(b, b).sqrt();
-    if bnorm == 0.0 {
-        x.iter_mut().for_each(|v| *v = 0.0);
-        return Ok(SolveInfo::default());
-    }
     let CgVectors { r, z, p, q } = work;
-    for v in [&mut *r, &mut *z, &mut *p, &mut *q] {
+    let Some(bnorm) = start(a, b, x, r) else {
+        return Ok(SolveInfo::default());
+    };
+    for v in [&mut *z, &mut *p, &mut *q] {
         v.clear();
         v.resize(n, 0.0);
     }
-    // r = b - A x
-    a.mul(x, r);
-    for_each_index(r, |i, ri| *ri = b[i] - *ri);
     let mut rz = precondition(r, z);
     p.copy_from_slice(z);
     let mut rel = dot(r, r).sqrt() / bnorm;
@@ -364,7 +353,8 @@ pub fn bicgstab(
     params: SolveParams,
 ) -> Result<SolveInfo, SolveError> {
     let n = a.n;
-    let Some(Start { bnorm, r: r0 }) = start(a, b, x) else {
+    let mut r0 = Vec::new();
+    let Some(bnorm) = start(a, b, x, &mut r0) else {
         return Ok(SolveInfo::default());
     };
     let inv_diag = inverse_diagonal(a);
