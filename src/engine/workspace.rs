@@ -12,6 +12,9 @@ pub(crate) struct Workspace {
     /// explicit stage reads them).
     pub(crate) neighbors: NeighborList,
     pub(crate) contacts: WallContacts,
+    /// The buffer of the list before `neighbors`, which the next list is written into.
+    #[serde(skip)]
+    pub(crate) spare_pairs: Vec<u32>,
     /// The pressure equation of the last step: its buffers, reused, and the exact
     /// projection's correction, carried.
     pub(crate) system: PressureSystem,

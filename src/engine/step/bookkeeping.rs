@@ -84,7 +84,7 @@ pub(super) fn remove_particles(sim: &mut Simulation, keep: &[bool]) -> usize {
         // the particles are renumbered: the AMG hierarchy's row keys mean nothing now
         sim.workspace.solver_cache.invalidate();
         // lists index particles: rebuild them for the next step's explicit stage
-        sim.workspace.neighbors = neighbor_list(sim, &sim.particles.position);
+        sim.workspace.neighbors = neighbor_list(sim, &sim.particles.position, Vec::new());
         let keep_contacts = {
             let mut offsets = vec![0u32];
             let mut contacts = Vec::new();

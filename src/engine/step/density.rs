@@ -13,10 +13,15 @@ use crate::math::{Real, Vec2};
 use rayon::prelude::*;
 
 /// The neighbour list at `x`, out to the larger of the two radii (of each pair, with
-/// multi-resolution).
-pub(super) fn neighbor_list(sim: &Simulation, x: &[Vec2]) -> NeighborList {
+/// multi-resolution), written into `pairs` (a buffer to reuse).
+pub(super) fn neighbor_list(sim: &Simulation, x: &[Vec2], mut pairs: Vec<u32>) -> NeighborList {
     let params = &sim.config.params;
-    NeighborList::build_scaled(x, params.re.max(params.re_lap), sim.scales())
+    let radius = params.re.max(params.re_lap);
+    // room for the last list's pairs and a twentieth more: particles move a fraction of
+    // a spacing a step
+    let last = sim.workspace.neighbors.pair_count();
+    pairs.reserve((last + last / 20).saturating_sub(pairs.len()));
+    NeighborList::build_scaled_into(x, radius, sim.scales(), pairs)
 }
 
 /// n and ∇·u of the current state (before the first step).
