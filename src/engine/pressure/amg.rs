@@ -67,15 +67,30 @@ where
             vals: acc.vals.clone(),
         }
     };
-    let chunks = n.div_ceil(CHUNK);
-    if n < PARALLEL_ROWS {
-        let mut acc = Accumulator::new(width);
-        (0..chunks).map(|c| chunk(c, &mut acc)).collect()
-    } else {
-        (0..chunks)
+    tasks_in_order(
+        n.div_ceil(CHUNK),
+        n >= PARALLEL_ROWS,
+        || Accumulator::new(width),
+        chunk,
+    )
+}
+
+/// `task(k, buffers)` for k in 0..count, in parallel when asked, each task with buffers
+/// from `init` (one set per rayon split); the results in the order of k.
+fn tasks_in_order<W, T: Send>(
+    count: usize,
+    parallel: bool,
+    init: impl Fn() -> W + Sync + Send,
+    task: impl Fn(usize, &mut W) -> T + Sync + Send,
+) -> Vec<T> {
+    if parallel {
+        (0..count)
             .into_par_iter()
-            .map_init(|| Accumulator::new(width), |acc, c| chunk(c, acc))
+            .map_init(init, |w, k| task(k, w))
             .collect()
+    } else {
+        let mut w = init();
+        (0..count).map(|k| task(k, &mut w)).collect()
     }
 }
 
@@ -582,16 +597,12 @@ fn galerkin(a: &CsrMatrix, p: &CsrMatrix, r: &CsrMatrix) -> CsrMatrix {
             vals: work.rac.vals.clone(),
         }
     };
-    let blocks = nc.div_ceil(GALERKIN_BLOCK);
-    let parts: Vec<RowChunk> = if n < PARALLEL_ROWS {
-        let mut work = GalerkinWork::new(n, nc);
-        (0..blocks).map(|b| block(b, &mut work)).collect()
-    } else {
-        (0..blocks)
-            .into_par_iter()
-            .map_init(|| GalerkinWork::new(n, nc), |work, b| block(b, work))
-            .collect()
-    };
+    let parts = tasks_in_order(
+        nc.div_ceil(GALERKIN_BLOCK),
+        n >= PARALLEL_ROWS,
+        || GalerkinWork::new(n, nc),
+        block,
+    );
     let mut m = CsrMatrix::default();
     m.fill_from_chunks(&parts);
     m

@@ -20,7 +20,8 @@ pub(super) fn neighbor_list(sim: &Simulation, x: &[Vec2], mut pairs: Vec<u32>) -
     // room for the last list's pairs and a twentieth more: particles move a fraction of
     // a spacing a step
     let last = sim.workspace.neighbors.pair_count();
-    pairs.reserve((last + last / 20).saturating_sub(pairs.len()));
+    pairs.clear();
+    pairs.reserve(last + last / 20);
     NeighborList::build_scaled_into(x, radius, sim.scales(), pairs)
 }
 
