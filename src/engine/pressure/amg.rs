@@ -53,28 +53,6 @@ where
     }
 }
 
-/// Rows computed by `row(i, acc)` in parallel chunks of rows (each row by one task, in
-/// a fixed order: deterministic), left in their chunks.
-fn rows_in_chunks<F>(n: usize, width: usize, row: F) -> Vec<RowChunk>
-where
-    F: Fn(usize, &mut Accumulator) + Sync + Send,
-{
-    let chunk = |c: usize, acc: &mut Accumulator| -> RowChunk {
-        let lens = acc.rows(c * CHUNK..((c + 1) * CHUNK).min(n), &row);
-        RowChunk {
-            lens,
-            cols: acc.cols.clone(),
-            vals: acc.vals.clone(),
-        }
-    };
-    tasks_in_order(
-        n.div_ceil(CHUNK),
-        n >= PARALLEL_ROWS,
-        || Accumulator::new(width),
-        chunk,
-    )
-}
-
 /// `task(k, buffers)` for k in 0..count, in parallel when asked, each task with buffers
 /// from `init` (one set per rayon split); the results in the order of k.
 fn tasks_in_order<W, T: Send>(
@@ -97,13 +75,20 @@ fn tasks_in_order<W, T: Send>(
 /// Rows of a chunked build.
 const CHUNK: usize = 1024;
 
-/// Assemble a CSR matrix from rows computed by `row(i, acc)` (see [`rows_in_chunks`]).
+/// Assemble a CSR matrix from rows computed by `row(i, acc)`, in parallel chunks of
+/// rows (each row by one task, in a fixed order: deterministic).
 fn build_rows<F>(n: usize, width: usize, row: F) -> CsrMatrix
 where
     F: Fn(usize, &mut Accumulator) + Sync + Send,
 {
+    let chunks = tasks_in_order(
+        n.div_ceil(CHUNK),
+        n >= PARALLEL_ROWS,
+        || Accumulator::new(width),
+        |c, acc| acc.chunk(c * CHUNK..((c + 1) * CHUNK).min(n), &row),
+    );
     let mut m = CsrMatrix::default();
-    m.fill_from_chunks(&rows_in_chunks(n, width, row));
+    m.fill_from_chunks(&chunks);
     m
 }
 
@@ -162,6 +147,20 @@ impl Accumulator {
             lens.push((self.cols.len() - before) as u32);
         }
         lens
+    }
+
+    /// [`Self::rows`] as a chunk of a matrix (the entries copied out).
+    fn chunk(
+        &mut self,
+        rows: impl ExactSizeIterator<Item = usize>,
+        row: impl Fn(usize, &mut Self),
+    ) -> RowChunk {
+        let lens = self.rows(rows, row);
+        RowChunk {
+            lens,
+            cols: self.cols.clone(),
+            vals: self.vals.clone(),
+        }
     }
 
     #[inline(always)]
@@ -586,16 +585,12 @@ fn galerkin(a: &CsrMatrix, p: &CsrMatrix, r: &CsrMatrix) -> CsrMatrix {
             cols: &work.ap.cols,
             vals: &work.ap.vals,
         };
-        let lens = work.rac.rows(coarse, |i, acc| product_row(r, &ap, i, acc));
+        let rows = work.rac.chunk(coarse, |i, acc| product_row(r, &ap, i, acc));
         for &j in &fine {
             work.local[j as usize] = u32::MAX;
         }
         work.fine = fine;
-        RowChunk {
-            lens,
-            cols: work.rac.cols.clone(),
-            vals: work.rac.vals.clone(),
-        }
+        rows
     };
     let parts = tasks_in_order(
         nc.div_ceil(GALERKIN_BLOCK),
