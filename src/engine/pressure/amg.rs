@@ -782,10 +782,6 @@ impl Hierarchy {
 
     /// z = M⁻¹ r for the fine matrix `a`: one V(1,1) cycle from zero.
     pub(crate) fn apply(&mut self, a: &CsrMatrix, r: &[Real], z: &mut [Real]) {
-        if self.levels.is_empty() {
-            self.coarsest.solve(r, z);
-            return;
-        }
         cycle(
             &self.levels,
             &mut self.work,
@@ -797,26 +793,19 @@ impl Hierarchy {
     }
 
     /// [`apply`](Self::apply), returning r·z (bit for bit the sum CG's `dot` gives)
-    /// from the pass that writes z: the V-cycle's last pass copies the smoothed iterate
-    /// into z, so CG's r·z needs no pass of its own.
+    /// from the post-smoothing pass that writes z, so CG's r·z needs no pass of its own.
     pub(crate) fn apply_dot(&mut self, a: &CsrMatrix, r: &[Real], z: &mut [Real]) -> Real {
         // the fixed-chunk sum gives the same bits on one thread or two
         let parallel = z.len() >= PARALLEL_ROWS;
-        if self.levels.is_empty() {
+        let Some((level, _)) = self.levels.split_first() else {
             self.coarsest.solve(r, z);
             return deterministic_sum_mut(z, parallel, |i, zi| r[i] * *zi);
-        }
-        smoothed_into_work(
-            &self.levels,
-            &mut self.work,
-            &mut self.coarsest,
-            Some(a),
-            r,
-            z,
-        );
-        let res = &self.work[0].res;
+        };
+        descend(&self.levels, &mut self.work, &mut self.coarsest, Some(a), r);
+        let y = &self.work[0].res;
+        let s = &level.smoother;
         deterministic_sum_mut(z, parallel, |i, zi| {
-            *zi = res[i];
+            *zi = post_smoothed(a, s, r, y, i);
             r[i] * *zi
         })
     }
@@ -887,7 +876,8 @@ impl<'a> Amg<'a> {
     }
 }
 
-/// One V-cycle from level `levels[0]`, whose operator is `fine` on the finest level.
+/// One V(1,1) cycle from zero on `levels[0]`, whose operator is `fine` on the finest
+/// level: x = M⁻¹ b.
 fn cycle(
     levels: &[Level],
     work: &mut [Work],
@@ -896,48 +886,49 @@ fn cycle(
     b: &[Real],
     x: &mut [Real],
 ) {
-    if levels.is_empty() {
+    let Some((level, _)) = levels.split_first() else {
         coarsest.solve(b, x);
         return;
-    }
-    smoothed_into_work(levels, work, coarsest, fine, b, x);
-    x.copy_from_slice(&work[0].res);
+    };
+    descend(levels, work, coarsest, fine, b);
+    let (a, s, y) = (fine.unwrap_or(&level.a), &level.smoother, &work[0].res);
+    for_rows(x, |i, xi| *xi = post_smoothed(a, s, b, y, i));
 }
 
-/// The V-cycle of [`cycle`] up to its post-smoothing, whose result it leaves in
-/// `work[0].res` (`x` holds the iterate before it); `levels` is not empty.
-fn smoothed_into_work(
+/// The V-cycle of [`cycle`] up to its post-smoothing: the iterate after the coarse
+/// correction, left in `work[0].res`. Each pass does what it can of the next: the
+/// residual forms the pre-smoothed iterate s b as it reads it, and the prolongation
+/// adds the correction to s b in the residual's buffer (free once restricted), so
+/// that the level takes four passes where it took six (pre-smoothing, residual,
+/// restriction, prolongation, post-smoothing and a copy). The arithmetic is the same,
+/// in the same order. `levels` is not empty.
+fn descend(
     levels: &[Level],
     work: &mut [Work],
     coarsest: &mut Coarsest,
     fine: Option<&CsrMatrix>,
     b: &[Real],
-    x: &mut [Real],
 ) {
     let (level, rest) = levels.split_first().expect("a level to smooth");
     let (w, rest_work) = work.split_first_mut().expect("one work entry per level");
     let Work { res, bc, xc } = w;
     let (a, s) = (fine.unwrap_or(&level.a), &level.smoother);
-    // pre-smoothing from zero, residual, restriction
-    for_rows(x, |i, xi| *xi = s[i] * b[i]);
-    {
-        let x: &[Real] = x;
-        for_rows(res, |i, ri| *ri = b[i] - a.row_dot(i, x));
-    }
+    // residual of the pre-smoothed iterate s b (damped Jacobi from zero), restriction
+    for_rows(res, |i, ri| *ri = b[i] - a.row_dot_scaled(i, s, b));
     {
         let res: &[Real] = res;
         for_rows(bc, |c, v| *v = level.r.row_dot(c, res));
     }
     cycle(rest, rest_work, coarsest, None, bc, xc);
-    // prolongation and post-smoothing
-    {
-        let xc: &[Real] = xc;
-        for_rows(x, |i, xi| *xi += level.p.row_dot(i, xc));
-    }
-    {
-        let x: &[Real] = x;
-        for_rows(res, |i, ri| *ri = x[i] + s[i] * (b[i] - a.row_dot(i, x)));
-    }
+    // prolongation of the coarse correction onto s b
+    let xc: &[Real] = xc;
+    for_rows(res, |i, yi| *yi = s[i] * b[i] + level.p.row_dot(i, xc));
+}
+
+/// Row i of the post-smoothing y + s (b - A y).
+#[inline(always)]
+fn post_smoothed(a: &CsrMatrix, s: &[Real], b: &[Real], y: &[Real], i: usize) -> Real {
+    y[i] + s[i] * (b[i] - a.row_dot(i, y))
 }
 
 #[cfg(test)]

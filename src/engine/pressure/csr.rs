@@ -28,6 +28,19 @@ impl CsrMatrix {
         s
     }
 
+    /// Row i of A times the vector s ∘ x (entrywise product), formed as it is read: bit
+    /// for bit `row_dot` of the product vector, without writing it.
+    #[inline(always)]
+    pub fn row_dot_scaled(&self, i: usize, s: &[Real], x: &[Real]) -> Real {
+        let (lo, hi) = (self.row_ptr[i], self.row_ptr[i + 1]);
+        let mut sum = 0.0;
+        for (v, &c) in self.val[lo..hi].iter().zip(&self.col[lo..hi]) {
+            let c = c as usize;
+            sum += v * (s[c] * x[c]);
+        }
+        sum
+    }
+
     /// y = A x (each row summed in column order: deterministic).
     pub fn mul(&self, x: &[Real], y: &mut [Real]) {
         if self.n < super::pcg::PARALLEL_MIN {
