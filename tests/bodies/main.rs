@@ -7,6 +7,7 @@ mod apex;
 mod circle;
 mod common;
 mod coupling;
+mod drop_tests;
 mod gauges;
 mod hydrostatics;
 mod impact;
