@@ -10,8 +10,10 @@
 //! docs/validation.md). The tests are ignored until the default does.
 
 use super::common::run_case_rows;
+use mpsfsi::analysis::reference::{FreeFall, FreeFallModel};
 use mpsfsi::case::load_case_file;
 use mpsfsi::run::RunStatus;
+use std::f64::consts::PI;
 use std::path::PathBuf;
 
 fn data(name: &str) -> PathBuf {
@@ -152,37 +154,24 @@ fn a_half_buoyant_cylinder_sinks_as_the_experiment_s_did() {
     );
 }
 
-/// The digitised wedge curves against the two bounds of a momentum balance: a body
-/// whose (M + m_a) V = M (V0 + g t) with the flat-plate added mass ρπc²/2 at von
-/// Kármán's wetted half-width c = h / tan β (no pile-up: the least force) and at
-/// Wagner's c = π h / (2 tan β) (the most). Every point, within the digitisation's
-/// 0.05 m/s, lies between them: a check of the data (a point off its curve, a wrong
-/// deadrise or mass per metre), not of the engine.
+/// The digitised wedge curves against the two bounds of a momentum balance, the
+/// momentum model of the free-fall references (`FreeFallModel`: (M + C_F ρ h²/2) V =
+/// M (V0 + g t)) closed with von Kármán's C_F = π / tan² β (no pile-up: the least
+/// force) and with Wagner's π³ / (4 tan² β) (the most), the flat plate's ρπc²/2 at
+/// either theory's wetted half-width. Every point, within the digitisation's 0.05 m/s,
+/// lies between them: a check of the data (a point off its curve, a wrong deadrise or
+/// mass per metre), not of the engine.
 #[test]
 fn the_wedge_drop_data_lies_between_the_momentum_bounds() {
-    let (mass, beta, g) = (94.0, 25f64.to_radians(), 9.81);
-    let bound = |pile_up: f64, until: f64| -> Vec<(f64, f64)> {
-        let (mut t, mut h, dt) = (0.0, 0.0, 1e-6);
-        let mut out = Vec::new();
-        while t < until {
-            let c = pile_up * h / beta.tan();
-            let added = 1000.0 * std::f64::consts::PI * c * c / 2.0;
-            let v = mass * (WEDGE_ENTRY_SPEED + g * t) / (mass + added);
-            h += v * dt;
-            t += dt;
-            out.push((t * 1e3, v));
-        }
-        out
+    let tan2 = 25f64.to_radians().tan().powi(2);
+    let model = |force_coefficient: f64| FreeFallModel {
+        v0: WEDGE_ENTRY_SPEED,
+        g: GRAVITY,
+        mass: 94.0,
+        force_coefficient,
+        density: 1000.0,
     };
-    let at_ms = |curve: &[(f64, f64)], ms: f64| {
-        curve
-            .iter()
-            .find(|(t, _)| *t >= ms)
-            .map(|p| p.1)
-            .expect("inside the bound")
-    };
-    let karman = bound(1.0, 0.041);
-    let wagner = bound(std::f64::consts::FRAC_PI_2, 0.041);
+    let (karman, wagner) = (model(PI / tan2), model(PI.powi(3) / (4.0 * tan2)));
     for source in ["experiment", "potential_flow"] {
         let points = curve(&format!("wedge_25deg_94kg_velocity_{source}.csv"));
         assert!(points.len() >= 30, "{source}: {} points", points.len());
@@ -191,8 +180,9 @@ fn the_wedge_drop_data_lies_between_the_momentum_bounds() {
             "{source} starts at {}",
             points[0].1
         );
-        for &(ms, v) in &points {
-            let (most, least) = (at_ms(&karman, ms), at_ms(&wagner, ms));
+        let times: Vec<f64> = points.iter().map(|p| p.0 * 1e-3).collect();
+        let (most, least) = (karman.speeds(&times), wagner.speeds(&times));
+        for ((&(ms, v), most), least) in points.iter().zip(most).zip(least) {
             assert!(
                 v <= most + 0.05 && v >= least - 0.05,
                 "{source} at {ms} ms: {v} m/s outside {least:.3}-{most:.3}"
