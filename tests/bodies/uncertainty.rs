@@ -1,7 +1,8 @@
 //! `--uncertainty` on the shipped 30° wedge against the similarity solution (C_F =
 //! 14.04, docs/references.md): between 30 % and 95 % of the run, the share of rows
 //! whose band holds the reference force, the band's width (mean u_fy over mean |fy|),
-//! and the ladder's cost over the single run.
+//! and the ladder's cost over the single run; the same for the free falls against the
+//! momentum model.
 
 use mpsfsi::case::{load_case_file, Limits, ValidCase};
 use mpsfsi::run::uncertainty::run_with_uncertainty;
@@ -129,6 +130,141 @@ fn the_user_style_family_bands_hold_the_similarity_force() {
         assert!(
             r.particle_steps_ratio <= 2.5,
             "{deadrise}°: {}",
+            r.particle_steps_ratio
+        );
+    }
+}
+
+/// One free fall's band against the momentum model (the free-fall reference of the
+/// drop-test measurements, docs/validation.md): the share of rows between 30 % and 95 %
+/// of the run whose band holds the model's force M (g - dV/dt) and downward speed, and
+/// the widths, mean u_fy over mean |fy| and mean u_vy over the mean speed lost.
+struct FreeFallReading {
+    force_coverage: f64,
+    force_width: f64,
+    speed_coverage: f64,
+    speed_width: f64,
+    particle_steps_ratio: f64,
+}
+
+fn free_fall_with_uncertainty(mass: f64) -> FreeFallReading {
+    use mpsfsi::analysis::reference::{FreeFall, FreeFallModel, WEDGE_30_FORCE_COEFFICIENT};
+    let path = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("cases/wedge_free_fall.json");
+    let mut value: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(path).unwrap()).unwrap();
+    value["bodies"][0]["motion"]["mass"] = mass.into();
+    // the momentum model's window of the free-fall tests ends at 0.9 t_chine = 13.4 ms
+    value["time"]["end"] = 0.0135.into();
+    let case = mpsfsi::case::parse_case_str(&value.to_string()).unwrap();
+    let v0 = -value["bodies"][0]["motion"]["velocity"][1]
+        .as_f64()
+        .unwrap();
+    let g = -case.fluid.gravity[1];
+    let model = FreeFallModel {
+        v0,
+        g,
+        mass,
+        force_coefficient: WEDGE_30_FORCE_COEFFICIENT,
+        density: case.fluid.density,
+    };
+    let case = ValidCase::new(case, &Limits::default()).unwrap();
+    let name = format!("uncertainty_free_fall_{mass}");
+    let out = PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join(&name);
+    let _ = std::fs::remove_dir_all(&out);
+    std::fs::create_dir_all(&out).unwrap();
+    let summary = run_with_uncertainty(&case, &out, &mut Quiet).unwrap();
+    assert_eq!(summary.status, RunStatus::Succeeded, "{:?}", summary.reason);
+    let u = summary.uncertainty.expect("an uncertainty block");
+    let end = case.time.end;
+    // the model's speed and force (upward on the body) at t, from a central difference
+    // of its speed over 1 µs
+    let reference = |t: f64| {
+        let v = model.speeds(&[t - 1e-6, t, t + 1e-6]);
+        (v[1], mass * (g - (v[2] - v[0]) / 2e-6))
+    };
+    let rows = |file: &str, value: &str| -> Vec<(f64, f64, f64)> {
+        let text = std::fs::read_to_string(out.join(file)).unwrap();
+        let mut lines = text.lines();
+        let header: Vec<&str> = lines.next().unwrap().split(',').collect();
+        let col = |c: &str| header.iter().position(|h| *h == c).unwrap();
+        let (t, body, x, ux) = (
+            col("time"),
+            col("body"),
+            col(value),
+            col(&format!("u_{value}")),
+        );
+        lines
+            .map(|l| l.split(',').collect::<Vec<&str>>())
+            .filter(|f| f[body] == "wedge")
+            .map(|f| {
+                (
+                    f[t].parse().unwrap(),
+                    f[x].parse().unwrap(),
+                    f[ux].parse().unwrap(),
+                )
+            })
+            .filter(|(t, _, _): &(f64, f64, f64)| *t >= 0.3 * end && *t <= 0.95 * end)
+            .collect()
+    };
+    let share = |hits: usize, n: usize| hits as f64 / n as f64;
+    let forces = rows("loads_uncertainty.csv", "fy");
+    let force_hits = forces
+        .iter()
+        .filter(|(t, fy, u)| (fy - reference(*t).1).abs() <= *u)
+        .count();
+    let force_width =
+        forces.iter().map(|r| r.2).sum::<f64>() / forces.iter().map(|r| r.1.abs()).sum::<f64>();
+    let speeds = rows("bodies_uncertainty.csv", "vy");
+    let speed_hits = speeds
+        .iter()
+        .filter(|(t, vy, u)| (-vy - reference(*t).0).abs() <= *u)
+        .count();
+    let speed_width =
+        speeds.iter().map(|r| r.2).sum::<f64>() / speeds.iter().map(|r| v0 + r.1).sum::<f64>();
+    let r = FreeFallReading {
+        force_coverage: share(force_hits, forces.len()),
+        force_width,
+        speed_coverage: share(speed_hits, speeds.len()),
+        speed_width,
+        particle_steps_ratio: u.particle_steps_ratio,
+    };
+    println!(
+        "{name}: force coverage {:.3} of {} rows, width {:.3}; speed coverage {:.3} of {} rows, width {:.3} of the speed lost; cost {:.2} (particle steps {:.2})",
+        r.force_coverage,
+        forces.len(),
+        r.force_width,
+        r.speed_coverage,
+        speeds.len(),
+        r.speed_width,
+        u.cost_ratio,
+        r.particle_steps_ratio,
+    );
+    r
+}
+
+/// The shipped free fall (241 kg/m) and a quarter of its mass at the case's 5 mm: the
+/// band holds the momentum model's force and speed on at least 90 % of the rows, and the
+/// ladder costs at most 2.5 single runs in particle updates. The widths are printed,
+/// not asserted: like the constant-speed wedge's they are far from the 10 % aimed at
+/// (docs/uncertainty.md).
+#[test]
+#[ignore = "about 2 minutes on two cores; numbers in docs/uncertainty.md"]
+fn the_free_fall_bands_hold_the_momentum_model() {
+    for mass in [241.0, 60.25] {
+        let r = free_fall_with_uncertainty(mass);
+        assert!(
+            r.force_coverage >= 0.9,
+            "{mass} kg/m: force coverage {}",
+            r.force_coverage
+        );
+        assert!(
+            r.speed_coverage >= 0.9,
+            "{mass} kg/m: speed coverage {}",
+            r.speed_coverage
+        );
+        assert!(
+            r.particle_steps_ratio <= 2.5,
+            "{mass} kg/m: {}",
             r.particle_steps_ratio
         );
     }
