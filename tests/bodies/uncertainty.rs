@@ -4,6 +4,7 @@
 //! and the ladder's cost over the single run; the same for the free falls against the
 //! momentum model.
 
+use mpsfsi::analysis::uncertainty::UncertaintySummary;
 use mpsfsi::case::{load_case_file, Limits, ValidCase};
 use mpsfsi::run::uncertainty::run_with_uncertainty;
 use mpsfsi::run::{Quiet, RunStatus};
@@ -32,15 +33,21 @@ fn wedge_with_uncertainty(name: &str, overrides: &[String]) -> Reading {
     ladder_against_similarity(name, &case, C_SIMILARITY)
 }
 
-/// Run `case` (a wedge named "wedge" entering at V from t = 0) with `--uncertainty` and
-/// read its band against the similarity force `c_f` ρ V³ t.
-fn ladder_against_similarity(name: &str, case: &ValidCase, c_f: f64) -> Reading {
+/// Run `case` with `--uncertainty` into the target's scratch directory `name`: the run
+/// directory and its uncertainty block.
+fn ladder(name: &str, case: &ValidCase) -> (PathBuf, UncertaintySummary) {
     let out = PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join(name);
     let _ = std::fs::remove_dir_all(&out);
     std::fs::create_dir_all(&out).unwrap();
     let summary = run_with_uncertainty(case, &out, &mut Quiet).unwrap();
     assert_eq!(summary.status, RunStatus::Succeeded, "{:?}", summary.reason);
-    let u = summary.uncertainty.expect("an uncertainty block");
+    (out, summary.uncertainty.expect("an uncertainty block"))
+}
+
+/// Run `case` (a wedge named "wedge" entering at V from t = 0) with `--uncertainty` and
+/// read its band against the similarity force `c_f` ρ V³ t.
+fn ladder_against_similarity(name: &str, case: &ValidCase, c_f: f64) -> Reading {
+    let (out, u) = ladder(name, case);
     let v = V;
     let text = std::fs::read_to_string(out.join("loads_uncertainty.csv")).unwrap();
     let end = case.time.end;
@@ -169,12 +176,7 @@ fn free_fall_with_uncertainty(mass: f64) -> FreeFallReading {
     };
     let case = ValidCase::new(case, &Limits::default()).unwrap();
     let name = format!("uncertainty_free_fall_{mass}");
-    let out = PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join(&name);
-    let _ = std::fs::remove_dir_all(&out);
-    std::fs::create_dir_all(&out).unwrap();
-    let summary = run_with_uncertainty(&case, &out, &mut Quiet).unwrap();
-    assert_eq!(summary.status, RunStatus::Succeeded, "{:?}", summary.reason);
-    let u = summary.uncertainty.expect("an uncertainty block");
+    let (out, u) = ladder(&name, &case);
     let end = case.time.end;
     // the model's speed and force (upward on the body) at t, from a central difference
     // of its speed over 1 µs
