@@ -177,7 +177,8 @@ pub fn logvinovich_errors(case: &Case, mass: Real, bodies: &[Vec<f64>]) -> Vec<(
     velocity_loss_against(&model, bodies)
 }
 
-fn momentum_model(case: &Case, mass: Real) -> FreeFallModel {
+/// The momentum model of the shipped 30° free fall's `case` with `mass` kg/m.
+pub fn momentum_model(case: &Case, mass: Real) -> FreeFallModel {
     FreeFallModel {
         v0: -case.bodies[0].motion_velocity_y(),
         g: -case.fluid.gravity[1],

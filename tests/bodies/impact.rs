@@ -232,8 +232,10 @@ fn largest_in_magnitude(values: impl Iterator<Item = f64>) -> f64 {
     values.fold(0.0, |w, e| if e.abs() > w.abs() { e } else { w })
 }
 
-/// [`free_fall_error`] with the wedge's axis `offset` spacings off the case's.
-fn free_fall_error_at(mass: f64, offset: f64) -> (f64, f64) {
+/// The shipped free-fall case's text with `mass` kg/m, the wedge's axis `offset`
+/// spacings off the case's, run to the end of the momentum model's window (0.9 t_chine
+/// = 13.4 ms).
+pub fn free_fall_case(mass: f64, offset: f64) -> String {
     let path = case_path("wedge_free_fall.json");
     let mut case: serde_json::Value =
         serde_json::from_str(&std::fs::read_to_string(path).unwrap()).unwrap();
@@ -241,9 +243,13 @@ fn free_fall_error_at(mass: f64, offset: f64) -> (f64, f64) {
     case["name"] = format!("free-fall-{mass}-{offset:.3}").into();
     let l0 = case["particle_spacing"].as_f64().unwrap();
     case["bodies"][0]["position"][0] = (offset * l0).into();
-    // the model's window ends at 0.9 t_chine = 13.4 ms
     case["time"]["end"] = 0.0135.into();
-    let text = case.to_string();
+    case.to_string()
+}
+
+/// [`free_fall_error`] with the wedge's axis `offset` spacings off the case's.
+fn free_fall_error_at(mass: f64, offset: f64) -> (f64, f64) {
+    let text = free_fall_case(mass, offset);
     let (loads, bodies, summary) = run_user_case_with_bodies(&text, "wedge");
     let parsed = parse_case_str(&text).unwrap();
     let errors = momentum_model_errors(&parsed, mass, &bodies);

@@ -155,25 +155,10 @@ struct FreeFallReading {
 }
 
 fn free_fall_with_uncertainty(mass: f64) -> FreeFallReading {
-    use mpsfsi::analysis::reference::{FreeFall, FreeFallModel, WEDGE_30_FORCE_COEFFICIENT};
-    let path = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("cases/wedge_free_fall.json");
-    let mut value: serde_json::Value =
-        serde_json::from_str(&std::fs::read_to_string(path).unwrap()).unwrap();
-    value["bodies"][0]["motion"]["mass"] = mass.into();
-    // the momentum model's window of the free-fall tests ends at 0.9 t_chine = 13.4 ms
-    value["time"]["end"] = 0.0135.into();
-    let case = mpsfsi::case::parse_case_str(&value.to_string()).unwrap();
-    let v0 = -value["bodies"][0]["motion"]["velocity"][1]
-        .as_f64()
-        .unwrap();
-    let g = -case.fluid.gravity[1];
-    let model = FreeFallModel {
-        v0,
-        g,
-        mass,
-        force_coefficient: WEDGE_30_FORCE_COEFFICIENT,
-        density: case.fluid.density,
-    };
+    use mpsfsi::analysis::reference::FreeFall;
+    let case = mpsfsi::case::parse_case_str(&crate::impact::free_fall_case(mass, 0.0)).unwrap();
+    let model = crate::common::momentum_model(&case, mass);
+    let (v0, g) = (model.v0, model.g);
     let case = ValidCase::new(case, &Limits::default()).unwrap();
     let name = format!("uncertainty_free_fall_{mass}");
     let (out, u) = ladder(&name, &case);
@@ -250,7 +235,7 @@ fn free_fall_with_uncertainty(mass: f64) -> FreeFallReading {
 /// not asserted: like the constant-speed wedge's they are far from the 10 % aimed at
 /// (docs/uncertainty.md).
 #[test]
-#[ignore = "about 2 minutes on two cores; numbers in docs/uncertainty.md"]
+#[ignore = "about 60 s on two cores; numbers in docs/uncertainty.md"]
 fn the_free_fall_bands_hold_the_momentum_model() {
     for mass in [241.0, 60.25] {
         let r = free_fall_with_uncertainty(mass);
