@@ -44,30 +44,46 @@ fn ladder(name: &str, case: &ValidCase) -> (PathBuf, UncertaintySummary) {
     (out, summary.uncertainty.expect("an uncertainty block"))
 }
 
+/// The wedge's rows of `file` (an `_uncertainty.csv` of run directory `out`) between 30 %
+/// and 95 % of the run's `end`: (time, `column`, its half-width `u_column`).
+fn band_rows(out: &std::path::Path, file: &str, column: &str, end: f64) -> Vec<(f64, f64, f64)> {
+    let text = std::fs::read_to_string(out.join(file)).unwrap();
+    let mut lines = text.lines();
+    let header: Vec<&str> = lines.next().unwrap().split(',').collect();
+    let col = |c: &str| header.iter().position(|h| *h == c).unwrap();
+    let (t, body, x, ux) = (
+        col("time"),
+        col("body"),
+        col(column),
+        col(&format!("u_{column}")),
+    );
+    lines
+        .map(|l| l.split(',').collect::<Vec<&str>>())
+        .filter(|f| f[body] == "wedge")
+        .map(|f| {
+            (
+                f[t].parse().unwrap(),
+                f[x].parse().unwrap(),
+                f[ux].parse().unwrap(),
+            )
+        })
+        .filter(|(t, _, _): &(f64, f64, f64)| *t >= 0.3 * end && *t <= 0.95 * end)
+        .collect()
+}
+
 /// Run `case` (a wedge named "wedge" entering at V from t = 0) with `--uncertainty` and
 /// read its band against the similarity force `c_f` ρ V³ t.
 fn ladder_against_similarity(name: &str, case: &ValidCase, c_f: f64) -> Reading {
     let (out, u) = ladder(name, case);
-    let v = V;
-    let text = std::fs::read_to_string(out.join("loads_uncertainty.csv")).unwrap();
     let end = case.time.end;
-    let (mut inside, mut rows, mut width, mut force) = (0, 0, 0.0, 0.0);
-    for line in text.lines().skip(1) {
-        let f: Vec<&str> = line.split(',').collect();
-        if f[1] != "wedge" {
-            continue;
-        }
-        let t: f64 = f[0].parse().unwrap();
-        if t < 0.3 * end || t > 0.95 * end {
-            continue;
-        }
-        let (fy, u_fy): (f64, f64) = (f[3].parse().unwrap(), f[6].parse().unwrap());
-        let reference = c_f * 1000.0 * v.powi(3) * t;
-        rows += 1;
-        inside += usize::from((fy - reference).abs() <= u_fy);
-        width += u_fy;
-        force += fy.abs();
-    }
+    let rows = band_rows(&out, "loads_uncertainty.csv", "fy", end);
+    let inside = rows
+        .iter()
+        .filter(|(t, fy, u)| (fy - c_f * 1000.0 * V.powi(3) * t).abs() <= *u)
+        .count();
+    let width: f64 = rows.iter().map(|r| r.2).sum();
+    let force: f64 = rows.iter().map(|r| r.1.abs()).sum();
+    let rows = rows.len();
     let wedge = u.bodies.iter().find(|b| b.name == "wedge").unwrap();
     let fy = wedge.columns.iter().find(|c| c.column == "fy").unwrap();
     let r = Reading {
@@ -85,7 +101,7 @@ fn ladder_against_similarity(name: &str, case: &ValidCase, c_f: f64) -> Reading 
         r.particle_steps_ratio,
         r.impulse.0,
         r.impulse.1,
-        0.5 * c_f * 1000.0 * v.powi(3) * end * end,
+        0.5 * c_f * 1000.0 * V.powi(3) * end * end,
         u.levels.iter().map(|l| (l.spacing, l.members, l.wall_time_s)).collect::<Vec<_>>()
     );
     r
@@ -169,39 +185,15 @@ fn free_fall_with_uncertainty(mass: f64) -> FreeFallReading {
         let v = model.speeds(&[t - 1e-6, t, t + 1e-6]);
         (v[1], mass * (g - (v[2] - v[0]) / 2e-6))
     };
-    let rows = |file: &str, value: &str| -> Vec<(f64, f64, f64)> {
-        let text = std::fs::read_to_string(out.join(file)).unwrap();
-        let mut lines = text.lines();
-        let header: Vec<&str> = lines.next().unwrap().split(',').collect();
-        let col = |c: &str| header.iter().position(|h| *h == c).unwrap();
-        let (t, body, x, ux) = (
-            col("time"),
-            col("body"),
-            col(value),
-            col(&format!("u_{value}")),
-        );
-        lines
-            .map(|l| l.split(',').collect::<Vec<&str>>())
-            .filter(|f| f[body] == "wedge")
-            .map(|f| {
-                (
-                    f[t].parse().unwrap(),
-                    f[x].parse().unwrap(),
-                    f[ux].parse().unwrap(),
-                )
-            })
-            .filter(|(t, _, _): &(f64, f64, f64)| *t >= 0.3 * end && *t <= 0.95 * end)
-            .collect()
-    };
     let share = |hits: usize, n: usize| hits as f64 / n as f64;
-    let forces = rows("loads_uncertainty.csv", "fy");
+    let forces = band_rows(&out, "loads_uncertainty.csv", "fy", end);
     let force_hits = forces
         .iter()
         .filter(|(t, fy, u)| (fy - reference(*t).1).abs() <= *u)
         .count();
     let force_width =
         forces.iter().map(|r| r.2).sum::<f64>() / forces.iter().map(|r| r.1.abs()).sum::<f64>();
-    let speeds = rows("bodies_uncertainty.csv", "vy");
+    let speeds = band_rows(&out, "bodies_uncertainty.csv", "vy", end);
     let speed_hits = speeds
         .iter()
         .filter(|(t, vy, u)| (-vy - reference(*t).0).abs() <= *u)
