@@ -70,6 +70,8 @@ pub struct Stabilization {
 pub struct Solver {
     pub kind: SolverKind,
     pub tolerance: Real,
+    /// The relative energy-norm error at which conjugate gradients stop (0: none).
+    pub energy_tolerance: Real,
     pub max_iterations: usize,
     pub amg_rebuild_interval: usize,
 }
@@ -134,6 +136,7 @@ impl Method {
             solver: Solver {
                 kind: s.solver,
                 tolerance: s.solver_tolerance,
+                energy_tolerance: s.solver_energy_tolerance,
                 max_iterations: s.solver_max_iterations,
                 amg_rebuild_interval: s.amg_rebuild_interval,
             },

@@ -94,10 +94,7 @@ pub fn solve_direct(rows: &[Vec<(usize, Real)>], b: &[Real]) -> Vec<Real> {
         &a,
         b,
         &mut x,
-        SolveParams {
-            tolerance: 1e-12,
-            max_iterations: 1,
-        },
+        SolveParams::relative(1e-12, 1),
     )
     .expect("direct solve");
     x

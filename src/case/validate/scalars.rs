@@ -78,6 +78,11 @@ pub(super) fn check_scalars(case: &Case) -> Check {
         s.solver_tolerance,
         "the relative residual at which the linear solver stops",
     )?;
+    non_negative(
+        "scheme.solver_energy_tolerance",
+        s.solver_energy_tolerance,
+        "the relative energy-norm error at which the pressure solve stops; 0 disables it",
+    )?;
     if s.solver_max_iterations == 0 {
         return reject("scheme.solver_max_iterations", "must be positive (got 0)");
     }

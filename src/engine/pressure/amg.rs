@@ -978,10 +978,7 @@ mod tests {
             a,
             b,
             &mut x,
-            SolveParams {
-                tolerance: 1e-8,
-                max_iterations: 500,
-            },
+            SolveParams::relative(1e-8, 500),
             Preconditioner::Amg,
         )
         .unwrap();

@@ -132,10 +132,7 @@ mod tests {
             &b,
             &mut x,
             bnorm,
-            SolveParams {
-                tolerance: 1e-10,
-                max_iterations: 500,
-            },
+            SolveParams::relative(1e-10, 500),
             30,
         )
         .unwrap();

@@ -41,6 +41,21 @@ pub struct SolveInfo {
 pub struct SolveParams {
     pub tolerance: Real,
     pub max_iterations: usize,
+    /// Conjugate gradients only: the relative error in the energy norm,
+    /// ||x* - x||_A / ||x||_A, at which the solve stops even above `tolerance` (0: none;
+    /// `Scheme::solver_energy_tolerance`).
+    pub energy: Real,
+}
+
+impl SolveParams {
+    /// Stops at the relative residual `tolerance` alone.
+    pub const fn relative(tolerance: Real, max_iterations: usize) -> Self {
+        Self {
+            tolerance,
+            max_iterations,
+            energy: 0.0,
+        }
+    }
 }
 
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]

@@ -222,10 +222,7 @@ pub(super) fn correct_to_exact_projection<K: Kernel>(
         &b,
         &mut delta,
         reference,
-        SolveParams {
-            tolerance: EXACT_TOLERANCE,
-            max_iterations: sim.config.method.solver.max_iterations,
-        },
+        SolveParams::relative(EXACT_TOLERANCE, sim.config.method.solver.max_iterations),
         RESTART,
     );
     sim.workspace.solver_cache = cache;

@@ -275,11 +275,12 @@ pub(super) fn solve_pressure(
     system: &mut PressureSystem,
     surface_values: &SurfaceValues,
 ) -> Result<(usize, Real), SimError> {
-    let params = SolveParams {
-        tolerance: sim.config.method.solver.tolerance,
-        max_iterations: sim.config.method.solver.max_iterations,
-    };
+    let solver = &sim.config.method.solver;
     let s = system;
+    let params = SolveParams {
+        energy: solver.energy_tolerance,
+        ..SolveParams::relative(solver.tolerance, solver.max_iterations)
+    };
     let policy = pressure::ReusePolicy {
         rebuild_interval: sim.config.method.solver.amg_rebuild_interval,
         // Keep, not Galerkin: recomputing R A P saved only a quarter of the setup
