@@ -125,7 +125,7 @@ pub fn tank_lattice(target: usize) -> (usize, usize) {
 
 /// The still tank of `cases/hydrostatic.json` scaled to about `target` fluid particles
 /// at spacing [`TANK_SPACING`], stepped `steps` steps at the fixed dt [`TANK_DT`]
-/// (max_dt = dt, end = steps dt), solver tolerance 1e-8, no probes or snapshots.
+/// (max_dt = dt, end = steps dt), the default solver stops, no probes or snapshots.
 pub fn tank_case_value(target: usize, steps: u64) -> Value {
     let l0 = TANK_SPACING;
     let (nx, ny) = tank_lattice(target);

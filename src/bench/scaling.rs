@@ -5,7 +5,7 @@
 //!   size at its fixed spacing l0 = 0.01 m, so dt/l0 and the per-particle physics stay
 //!   the same) at about 10k, 40k, 160k, 640k and 1.3M fluid particles, up to
 //!   `--max-particles`. Each size is built once and stepped a fixed number of steps
-//!   from rest at a fixed dt (solver tolerance 1e-8) on the engine alone (no output
+//!   from rest at a fixed dt (the default solver stops) on the engine alone (no output
 //!   writer). One untimed warm-up step, then the timed steps; stage times come from the
 //!   engine's [`StageTimes`]. Memory is measured, not estimated: free heap pages are
 //!   handed back (`malloc_trim`), the kernel's peak-RSS mark is reset
@@ -421,8 +421,8 @@ pub fn scaling_markdown(rows: &[ScalingPoint], options: &ScalingOptions) -> Stri
     let _ = writeln!(
         md,
         "Still hydrostatic tank, aspect 2:1, l0 = {TANK_SPACING} m (`cases/hydrostatic.json` scaled in size), \
-         {} timed steps from rest at fixed dt = {TANK_DT} s after one untimed warm-up step, default scheme with \
-         solver tolerance 1e-8, engine only (no output writer). Memory: VmRSS before the build (after `malloc_trim`), \
+         {} timed steps from rest at fixed dt = {TANK_DT} s after one untimed warm-up step, default scheme \
+         (CG to a relative residual of 1e-8 or an energy-norm error of 1e-3), engine only (no output writer). Memory: VmRSS before the build (after `malloc_trim`), \
          VmRSS after the build and the peak VmHWM over build and steps (mark reset through `/proc/self/clear_refs`), \
          per fluid particle. Machine: {} logical CPUs; the default pool has {} threads.\n",
         options.steps,

@@ -156,8 +156,8 @@ fn wedge_error_at(deadrise: f64, reference: f64, l0: f64) -> f64 {
     err
 }
 
-/// 15° deadrise: similarity C_F = 85.0. Reads -0.7 % (t0 0.16 ms), 328 steps, 44 s
-/// on two cores.
+/// 15° deadrise: similarity C_F = 85.0. Reads +2.7 % (t0 0.16 ms), 322 steps, about 40 s
+/// on two cores; over the four axis offsets +1.1 ± 1.9 % (+0.7 / +5.4 / -3.8 / +2.1 %).
 #[test]
 fn user_wedge_15_degrees_with_defaults() {
     let err = wedge_error(15.0, 85.0);
@@ -166,7 +166,7 @@ fn user_wedge_15_degrees_with_defaults() {
 
 /// 30° deadrise, the shipped wedge's geometry in the user tank: similarity C_F = 14.04.
 #[test]
-#[ignore = "90 s on two cores; passes: +1.7 % (t0 0.28 ms, per-step scatter 0.31)"]
+#[ignore = "75 s on two cores; passes: +1.6 % (t0 0.28 ms, per-step scatter 0.26)"]
 fn user_wedge_30_degrees_with_defaults() {
     let err = wedge_error(30.0, 14.04);
     assert!(err.abs() < 0.05, "{:+.1} %", 100.0 * err);
@@ -174,7 +174,7 @@ fn user_wedge_30_degrees_with_defaults() {
 
 /// 40° deadrise: similarity C_F = 5.45.
 #[test]
-#[ignore = "80 s on two cores; passes: -0.7 % (t0 0.29 ms, per-step scatter 0.37)"]
+#[ignore = "80 s on two cores; passes: +0.8 % (t0 0.29 ms, per-step scatter 0.34)"]
 fn user_wedge_40_degrees_with_defaults() {
     let err = wedge_error(40.0, 5.45);
     assert!(err.abs() < 0.05, "{:+.1} %", 100.0 * err);
@@ -185,8 +185,7 @@ fn user_wedge_40_degrees_with_defaults() {
 /// far thinner than a spacing and one run's reading moves with the lattice's offset from
 /// the axis, so the four-offset mean is what is held. The first step (0.163 ms, 3.6 % of
 /// the entry) puts t0 late, which alone reads +5.8 % (docs/validation.md, Known limits:
-/// the first step and the onset reading). Reads +8.2 ± 1.4 % (+11.5, +9.4, +5.3, +6.7 %;
-/// the body on the axis reads as at an eighth of a spacing off it).
+/// the first step and the onset reading). Reads +9.9 ± 1.6 % (+12.0, +7.2, +13.2, +7.3 %).
 #[test]
 fn user_wedge_10_degrees_with_defaults() {
     let (c, se) = offset_ensemble(10.0, 0.005, 0.2);
@@ -210,7 +209,7 @@ fn user_wedge_10_degrees_at_twice_the_resolution() {
 
 /// 25° deadrise: similarity C_F = 23.61.
 #[test]
-#[ignore = "85 s on two cores, kept out of CI for time; passes: -1.8 % (t0 0.16 ms, per-step scatter 0.35)"]
+#[ignore = "85 s on two cores, kept out of CI for time; passes: +0.2 % (t0 0.16 ms, per-step scatter 0.32)"]
 fn user_wedge_25_degrees_with_defaults() {
     let err = wedge_error(25.0, 23.61);
     assert!(err.abs() < 0.05, "{:+.1} %", 100.0 * err);
@@ -291,11 +290,11 @@ fn shipped_free_fall_wedge_at_its_spacing() {
 /// there) 1.6 times it. The deceleration's added mass is where the reference models
 /// part: the modified Logvinovich model scaled to the similarity force puts this body's
 /// velocity loss 4.2 % below the momentum model's (the shipped mass 2.1 %), and the case's
-/// own run reads -0.7 % against it. Read over the four axis offsets of the impact ensembles
+/// own run reads -1.7 % against it. Read over the four axis offsets of the impact ensembles
 /// (1/8 to 1/4 l0): one run reads 2.6 points apart from another across them, and moves by
 /// 0.1 points with the round-off of a reordered sum, which the mean of four does not.
 #[test]
-#[ignore = "90 s on two cores; passes: mean -4.3 % over the offsets (-5.1 / -4.6 / -4.9 / -2.6 %), worst -6.9 %"]
+#[ignore = "90 s on two cores; passes: mean -3.8 % over the offsets (-4.1 / -3.7 / -4.5 / -3.1 %), worst -6.3 %"]
 fn light_free_fall_wedge_at_its_spacing() {
     let runs: Vec<(f64, f64)> = AXIS_OFFSETS
         .iter()
@@ -363,7 +362,7 @@ fn cfl_reads_as_half_the_cfl(l0: f64) {
 }
 
 #[test]
-#[ignore = "60 s on two cores; passes: C_F 13.33 ± 0.58 at CFL 0.2 against 13.73 ± 0.22 at 0.1, 0.6 standard errors apart"]
+#[ignore = "60 s on two cores; passes: C_F 13.36 ± 0.58 at CFL 0.2 against 13.65 ± 0.25 at 0.1, 0.5 standard errors apart"]
 fn the_default_cfl_reads_as_half_of_it_at_1_cm() {
     cfl_reads_as_half_the_cfl(0.01);
 }

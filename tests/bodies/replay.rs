@@ -8,7 +8,7 @@
 //! added mass passes its own mass during the entry) at 5 mm, 100 spacings across as
 //! the README asks of an impact: impulse within 2 %. At 1 cm, 50 spacings across, the
 //! light fall's replay reads 2.8 % high (its steps differ from the free fall's, and the
-//! coarse load's step-to-step noise with them); at 5 mm 0.4 % low.
+//! coarse load's step-to-step noise with them); at 5 mm 1.1 % low.
 
 use super::common::{run_case_rows, shipped};
 use mpsfsi::case::Case;
