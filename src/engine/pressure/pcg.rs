@@ -207,9 +207,10 @@ pub(crate) fn count_setup(clock: std::time::Instant) {
 }
 
 /// Has CG's next iterate x + alpha p reached `params.energy`? Its error in the energy
-/// norm, ||x* - x||_A, is below the step CG just took, sqrt(alpha r·z), once CG gains
-/// more than a factor 0.7 an iteration (the step's square is the error's square less
-/// the next one's; the AMG-preconditioned solves gain 3-4); and x·(b - r) is x·A x.
+/// norm, ||x* - x||_A, is below the step CG just took, sqrt(alpha r·z), once an
+/// iteration cuts the error by √2 or more (the step's square is this iterate's squared
+/// error less the next one's; the AMG-preconditioned solves cut it 3-4 times); and
+/// x·(b - r) is x·A x.
 fn energy_converged(
     params: &SolveParams,
     step_energy: Real,

@@ -276,11 +276,11 @@ pub(super) fn solve_pressure(
     surface_values: &SurfaceValues,
 ) -> Result<(usize, Real), SimError> {
     let solver = &sim.config.method.solver;
-    let s = system;
     let params = SolveParams {
         energy: solver.energy_tolerance,
         ..SolveParams::relative(solver.tolerance, solver.max_iterations)
     };
+    let s = system;
     let policy = pressure::ReusePolicy {
         rebuild_interval: sim.config.method.solver.amg_rebuild_interval,
         // Keep, not Galerkin: recomputing R A P saved only a quarter of the setup
