@@ -1169,6 +1169,42 @@ mod tests {
         assert!(its[2] <= 2 * its[0].max(8), "{its:?}");
         assert!(its[2] < 40, "{its:?}");
     }
+
+    /// The energy-norm stop (`SolveParams::energy`) against an exact solution: on the
+    /// jittered particle Laplacian, with the right-hand side of a known field (smooth and
+    /// rough parts), the iterate returned is within the share of the field asked for in
+    /// the A-norm, sooner than the relative residual 1e-8 would stop.
+    #[test]
+    fn the_energy_stop_bounds_the_error_it_asks_for() {
+        let a = particle_laplacian(60, 7);
+        let exact: Vec<Real> = (0..a.n)
+            .map(|i| (0.013 * i as Real).sin() + 0.1 * (1.7 * i as Real).cos())
+            .collect();
+        let mut b = vec![0.0; a.n];
+        a.mul(&exact, &mut b);
+        let a_norm = |v: &[Real]| {
+            let mut av = vec![0.0; a.n];
+            a.mul(v, &mut av);
+            v.iter().zip(&av).map(|(x, y)| x * y).sum::<Real>().sqrt()
+        };
+        let (relative_iterations, _) = solve_amg(&a, &b);
+        for energy in [1e-2, 1e-3, 1e-4] {
+            let mut x = vec![0.0; a.n];
+            let params = SolveParams {
+                energy,
+                ..SolveParams::relative(1e-14, 500)
+            };
+            let info = conjugate_gradient(&a, &b, &mut x, params, Preconditioner::Amg).unwrap();
+            let error: Vec<Real> = x.iter().zip(&exact).map(|(x, e)| x - e).collect();
+            let share = a_norm(&error) / a_norm(&exact);
+            assert!(share <= energy, "asked {energy}, got {share:e}");
+            assert!(
+                info.iterations < relative_iterations,
+                "{energy}: {} iterations against {relative_iterations} to 1e-8",
+                info.iterations
+            );
+        }
+    }
 }
 
 #[cfg(test)]
