@@ -60,6 +60,43 @@ where
     partial.iter().sum()
 }
 
+/// [`deterministic_sum_mut`] of two sums at once: Σ f(i, &mut y[i]).0 and .1, each bit
+/// for bit what a separate pass of [`deterministic_sum_mut`] or [`deterministic_sum`]
+/// gives (the same chunks, summed in the same order).
+pub fn deterministic_sums_mut<F>(y: &mut [Real], parallel: bool, f: F) -> (Real, Real)
+where
+    F: Fn(usize, &mut Real) -> (Real, Real) + Sync,
+{
+    use rayon::prelude::*;
+    let chunk_sums = |c: usize, ys: &mut [Real]| {
+        let (mut s, mut t) = (0.0, 0.0);
+        for (k, v) in ys.iter_mut().enumerate() {
+            let (a, b) = f(c * SUM_CHUNK + k, v);
+            s += a;
+            t += b;
+        }
+        (s, t)
+    };
+    if !parallel {
+        let (mut s, mut t) = (0.0, 0.0);
+        for (c, ys) in y.chunks_mut(SUM_CHUNK).enumerate() {
+            let (a, b) = chunk_sums(c, ys);
+            s += a;
+            t += b;
+        }
+        return (s, t);
+    }
+    let partial: Vec<(Real, Real)> = y
+        .par_chunks_mut(SUM_CHUNK)
+        .enumerate()
+        .map(|(c, ys)| chunk_sums(c, ys))
+        .collect();
+    (
+        partial.iter().map(|p| p.0).sum(),
+        partial.iter().map(|p| p.1).sum(),
+    )
+}
+
 /// The fixed chunk of the deterministic sums.
 const SUM_CHUNK: usize = 2048;
 

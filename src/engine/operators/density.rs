@@ -1,7 +1,7 @@
 //! The particle number density n_i = Σ_j w(r_ij) (Koshizuka & Oka 1996; Sun et al. 2022
 //! eq. 4) and the HS divergence of the velocity (Ikari, Khayyer & Gotoh 2015 eq. 2), fluid neighbours
 //! only: a wall adds its own shares (`WallContacts::number_density`,
-//! `WallContacts::add_divergence`). The step needs both at the same positions, so they
+//! `WallContacts::with_divergence`). The step needs both at the same positions, so they
 //! come from one pass over each neighbourhood. Beside them: the gradient of n (particle
 //! shifting), the HS divergence in row form (the exact projection) and the neighbour
 //! count.
@@ -43,9 +43,23 @@ pub fn number_density_and_divergence_all<K: Kernel>(
     u: &[Vec2],
     c: Real,
 ) -> (Vec<Real>, Vec<Real>) {
+    number_density_and_divergence_then::<K>(cloud, u, c, |_, n, div| (n, div))
+}
+
+/// [`number_density_and_divergence`] of every particle, each passed through `then(i, n,
+/// ∇·u)` in the same pass (a stage adds the walls' shares there).
+pub fn number_density_and_divergence_then<K: Kernel>(
+    cloud: &Cloud,
+    u: &[Vec2],
+    c: Real,
+    then: impl Fn(usize, Real, Real) -> (Real, Real) + Sync,
+) -> (Vec<Real>, Vec<Real>) {
     (0..cloud.len())
         .into_par_iter()
-        .map(|i| number_density_and_divergence::<K>(cloud, u, c, i))
+        .map(|i| {
+            let (n, div) = number_density_and_divergence::<K>(cloud, u, c, i);
+            then(i, n, div)
+        })
         .unzip()
 }
 

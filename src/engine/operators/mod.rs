@@ -28,7 +28,7 @@ mod vector_laplacian;
 pub use collision::{collision_velocity_change, collision_velocity_changes};
 pub use density::{
     hs_divergence_row, neighbour_count, number_density_and_divergence,
-    number_density_and_divergence_all, number_density_gradient,
+    number_density_and_divergence_all, number_density_and_divergence_then, number_density_gradient,
 };
 pub use divergence::divergence;
 pub use gradient::{

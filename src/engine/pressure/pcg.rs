@@ -4,7 +4,7 @@
 
 use super::amg::Hierarchy;
 use super::{CsrMatrix, SolveError, SolveInfo, SolveParams};
-use crate::math::{deterministic_sum, deterministic_sum_mut, Real};
+use crate::math::{deterministic_sum, deterministic_sum_mut, deterministic_sums_mut, Real};
 use rayon::prelude::*;
 
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -209,19 +209,10 @@ pub(crate) fn count_setup(clock: std::time::Instant) {
 /// Has CG's next iterate x + alpha p reached `params.energy`? Its error in the energy
 /// norm, ||x* - x||_A, is below the step CG just took, sqrt(alpha r·z), once an
 /// iteration cuts the error by √2 or more (the step's square is this iterate's squared
-/// error less the next one's; the AMG-preconditioned solves cut it 3-4 times); and
-/// x·(b - r) is x·A x.
-fn energy_converged(
-    params: &SolveParams,
-    step_energy: Real,
-    (x, p, alpha): (&[Real], &[Real], Real),
-    (b, r): (&[Real], &[Real]),
-) -> bool {
-    if params.energy <= 0.0 {
-        return false;
-    }
-    let energy = deterministic_sum(x.len(), |i| (x[i] + alpha * p[i]) * (b[i] - r[i]));
-    step_energy <= params.energy * params.energy * energy
+/// error less the next one's; the AMG-preconditioned solves cut it 3-4 times);
+/// `energy` is x·(b - r) = x·A x at that iterate.
+fn energy_converged(params: &SolveParams, step_energy: Real, energy: Real) -> bool {
+    params.energy > 0.0 && step_energy <= params.energy * params.energy * energy
 }
 
 /// Preconditioned conjugate gradients; `x` is the initial guess.
@@ -337,16 +328,24 @@ pub(crate) fn pcg_in(
             return Err(SolveError::Breakdown);
         }
         let alpha = rz / pq;
-        let rr = deterministic_sum_mut(r, parallel, |i, ri| {
+        let update = |i: usize, ri: &mut Real| {
             *ri += -alpha * q[i];
             *ri * *ri
-        });
+        };
+        // with the energy stop, x·(b - r) at the next iterate in the same pass
+        let (rr, energy) = if params.energy > 0.0 {
+            deterministic_sums_mut(r, parallel, |i, ri| {
+                (update(i, ri), (x[i] + alpha * p[i]) * (b[i] - *ri))
+            })
+        } else {
+            (deterministic_sum_mut(r, parallel, update), 0.0)
+        };
         rel = rr.sqrt() / bnorm;
         if !rel.is_finite() {
             return Err(SolveError::Breakdown);
         }
         it += 1;
-        if rel <= params.tolerance || energy_converged(&params, alpha * rz, (x, p, alpha), (b, r)) {
+        if rel <= params.tolerance || energy_converged(&params, alpha * rz, energy) {
             // converged: the last iterate needs no new direction, so no preconditioner
             // application (one V-cycle of the 4-16 a step takes)
             for_each_index(x, |i, xi| *xi += alpha * p[i]);

@@ -7,10 +7,9 @@
 use crate::case::WallKinematics;
 use crate::engine::kernel::Kernel;
 use crate::engine::neighbors::NeighborList;
-use crate::engine::operators::{number_density_and_divergence_all, Cloud};
+use crate::engine::operators::{number_density_and_divergence_then, Cloud};
 use crate::engine::simulation::Simulation;
 use crate::math::{Real, Vec2};
-use rayon::prelude::*;
 
 /// The neighbour list at `x`, out to the larger of the two radii (of each pair, with
 /// multi-resolution), written into `pairs` (a buffer to reuse).
@@ -29,39 +28,40 @@ pub(super) fn neighbor_list(sim: &Simulation, x: &[Vec2], mut pairs: Vec<u32>) -
 pub(super) fn initial_number_density_and_divergence<K: Kernel>(sim: &mut Simulation) {
     let x = &sim.particles.position;
     let u = &sim.particles.velocity;
-    let (fluid, div) = fluid_density_and_divergence::<K>(sim, x, u);
-    sim.particles.number_density = with_walls(sim, &fluid);
+    let contacts = &sim.workspace.contacts;
+    let (n, div) =
+        density_and_divergence::<K>(sim, x, u, |i, n, div| (contacts.number_density(i, n), div));
+    sim.particles.number_density = n;
     sim.particles.number_density_rate = div;
 }
 
-/// The fluid neighbours' n and HS divergence of `u` at the positions `x`.
-fn fluid_density_and_divergence<K: Kernel>(
+/// n and the HS divergence of `u` at the positions `x` over the fluid neighbours, each
+/// particle's pair passed through `walls(i, n, ∇·u)` in the same pass to add the walls'
+/// shares.
+fn density_and_divergence<K: Kernel>(
     sim: &Simulation,
     x: &[Vec2],
     u: &[Vec2],
+    walls: impl Fn(usize, Real, Real) -> (Real, Real) + Sync,
 ) -> (Vec<Real>, Vec<Real>) {
     let params = &sim.config.params;
     let cloud = Cloud::new(x, &sim.workspace.neighbors, params.re).with_scales(sim.scales());
-    number_density_and_divergence_all::<K>(&cloud, u, params.divergence_coefficient)
+    number_density_and_divergence_then::<K>(&cloud, u, params.divergence_coefficient, walls)
 }
 
-/// n_i of every particle: its fluid neighbours' `fluid` plus the walls' shares.
-fn with_walls(sim: &Simulation, fluid: &[Real]) -> Vec<Real> {
+/// Particle i's divergence `div` with the walls' share, -c ∇Z·(u_i - u_w), for the
+/// particle velocity `u_i`, when `scheme.wall_kinematics` is `source` (the source uses
+/// u^n there, the end of the step u).
+fn wall_divergence(sim: &Simulation) -> impl Fn(usize, Real, Vec2) -> Real + Sync + '_ {
+    let source = sim.config.method.wall_kinematics == WallKinematics::Source;
+    let c = sim.config.params.divergence_coefficient;
     let contacts = &sim.workspace.contacts;
-    fluid
-        .par_iter()
-        .enumerate()
-        .map(|(i, &n)| contacts.number_density(i, n))
-        .collect()
-}
-
-/// The walls' share of the divergence, -c ∇Z·(u_i - u_w) with the particle velocities
-/// `u_at_walls`, when `scheme.wall_kinematics` is `source` (the source uses u^n there,
-/// the end of the step u).
-fn add_wall_divergence(sim: &Simulation, div: &mut [Real], u_at_walls: &[Vec2]) {
-    if sim.config.method.wall_kinematics == WallKinematics::Source {
-        let c = sim.config.params.divergence_coefficient;
-        sim.workspace.contacts.add_divergence(div, u_at_walls, c);
+    move |i, div, u_i| {
+        if source {
+            contacts.with_divergence(i, div, u_i, c)
+        } else {
+            div
+        }
     }
 }
 
@@ -79,12 +79,12 @@ pub(super) fn at_prediction<K: Kernel>(
     x_star: &[Vec2],
     u_start: &[Vec2],
 ) -> AtPrediction {
-    let (fluid, mut div) = fluid_density_and_divergence::<K>(sim, x_star, &sim.particles.velocity);
-    add_wall_divergence(sim, &mut div, u_start);
-    AtPrediction {
-        n: with_walls(sim, &fluid),
-        div,
-    }
+    let (contacts, wall_div) = (&sim.workspace.contacts, wall_divergence(sim));
+    let (n, div) =
+        density_and_divergence::<K>(sim, x_star, &sim.particles.velocity, |i, n, div| {
+            (contacts.number_density(i, n), wall_div(i, div, u_start[i]))
+        });
+    AtPrediction { n, div }
 }
 
 /// n and ∇·u at the end of the step, for the error-compensating source: the walls' share
@@ -93,16 +93,16 @@ pub(super) fn update_number_density_and_divergence<K: Kernel>(
     sim: &mut Simulation,
     x_star: &[Vec2],
 ) {
-    let x = &sim.particles.position;
-    let u = &sim.particles.velocity;
-    let (fluid, mut div) = fluid_density_and_divergence::<K>(sim, x, u);
-    // the same divergence as the source's (with or without the wall's virtual points)
-    add_wall_divergence(sim, &mut div, u);
-    let contacts = &sim.workspace.contacts;
-    sim.particles.number_density = fluid
-        .par_iter()
-        .enumerate()
-        .map(|(i, &n)| contacts.number_density_moved(i, n, x[i] - x_star[i]))
-        .collect();
+    let (n, div) = {
+        let x = &sim.particles.position;
+        let u = &sim.particles.velocity;
+        let (contacts, wall_div) = (&sim.workspace.contacts, wall_divergence(sim));
+        // the same divergence as the source's (with or without the wall's virtual points)
+        density_and_divergence::<K>(sim, x, u, |i, n, div| {
+            let n = contacts.number_density_moved(i, n, x[i] - x_star[i]);
+            (n, wall_div(i, div, u[i]))
+        })
+    };
+    sim.particles.number_density = n;
     sim.particles.number_density_rate = div;
 }

@@ -46,7 +46,20 @@ pub(super) fn keep_particles_apart(
     }
     let rw = sim.config.method.wall_repulsion_distance * l0;
     if rw > 0.0 {
-        for i in 0..n {
+        // the particles within their safety distance of a wall, found in parallel (a
+        // dozen a step of 75k on the shipped wedge), then treated in index order
+        let (contacts, scales) = (&sim.workspace.contacts, sim.scales());
+        let close: Vec<usize> = (0..n)
+            .into_par_iter()
+            .filter(|&i| {
+                let rw = rw * scales.of(i);
+                contacts
+                    .of(i)
+                    .iter()
+                    .any(|c| c.distance < rw || c.penetrated)
+            })
+            .collect();
+        for i in close {
             for c in sim.workspace.contacts.of(i) {
                 // the particle's own safety distance and mass
                 let (rw, m) = {
@@ -97,9 +110,11 @@ pub(super) fn filter_velocity<K: Kernel>(sim: &mut Simulation, x_star: &[Vec2], 
         &cloud,
         &sim.particles.velocity,
     );
-    for (i, ui) in sim.particles.velocity.iter_mut().enumerate() {
-        *ui += sums.get(i).map_or(Vec2::zeros(), |s| s * (eps / n0));
-    }
+    sim.particles
+        .velocity
+        .par_iter_mut()
+        .zip(sums.par_iter())
+        .for_each(|(ui, s)| *ui += s * (eps / n0));
 }
 
 /// Fickian particle shifting (Lind et al. 2012, in MPS form): δr_i = -A l0² ∇n_i / n0,

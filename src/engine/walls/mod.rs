@@ -363,17 +363,17 @@ impl WallContacts {
         n
     }
 
-    /// The walls' share of the HS divergence, -c ∇Z · (u_i - u_w): the virtual points
-    /// move with the wall.
-    pub fn add_divergence(&self, div: &mut [Real], u: &[Vec2], c: Real) {
-        div.par_iter_mut().enumerate().for_each(|(i, d)| {
-            for ct in self.of(i) {
-                *d -= c * ct
-                    .terms
-                    .number_density_gradient
-                    .dot(&(u[i] - ct.wall_velocity));
-            }
-        });
+    /// `div` (particle i's fluid divergence) with the walls' share added, -c ∇Z · (u_i -
+    /// u_w): the virtual points move with the wall.
+    #[inline]
+    pub fn with_divergence(&self, i: usize, mut div: Real, u_i: Vec2, c: Real) -> Real {
+        for ct in self.of(i) {
+            div -= c * ct
+                .terms
+                .number_density_gradient
+                .dot(&(u_i - ct.wall_velocity));
+        }
+        div
     }
 
     /// The walls' share of the viscous Laplacian of particle i with velocity `u_i`,
