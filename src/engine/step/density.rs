@@ -36,8 +36,8 @@ pub(super) fn initial_number_density_and_divergence<K: Kernel>(sim: &mut Simulat
 }
 
 /// n and the HS divergence of `u` at the positions `x` over the fluid neighbours, each
-/// particle's pair passed through `walls(i, n, ∇·u)` in the same pass to add the walls'
-/// shares.
+/// particle's (n, ∇·u) passed through `walls(i, n, ∇·u)` in the same pass to add the
+/// walls' shares.
 fn density_and_divergence<K: Kernel>(
     sim: &Simulation,
     x: &[Vec2],
