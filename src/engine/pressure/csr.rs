@@ -141,10 +141,11 @@ impl CsrMatrix {
         write: impl Fn(usize, &mut Entries) -> (Vec<u32>, T) + Sync,
     ) -> Vec<T> {
         let total: usize = bounds.iter().sum();
+        // the last fill's entries stay where they are, to be overwritten: only room
+        // beyond them is added, zeroed (clearing first zeroed the whole matrix on one
+        // thread every step: 1.9 ms of a 160k-particle step, as the bound of rows that
+        // reach the surface is always above the last fill's length)
         if self.col.len() < total {
-            // a larger matrix than any before: new buffers, nothing to keep
-            self.col.clear();
-            self.val.clear();
             self.col.resize(total, 0);
             self.val.resize(total, 0.0);
         }

@@ -184,7 +184,7 @@ fn start(a: &CsrMatrix, b: &[Real], x: &mut [Real], r: &mut Vec<Real>) -> Option
         x.iter_mut().for_each(|v| *v = 0.0);
         return None;
     }
-    r.clear();
+    // every entry is written by the product: no zeroing of the kept buffer
     r.resize(a.n, 0.0);
     a.mul(x, r);
     for_each_index(r, |i, ri| *ri = b[i] - *ri);
@@ -302,8 +302,9 @@ pub(crate) fn pcg_in(
     let Some(bnorm) = start(a, b, x, r) else {
         return Ok(SolveInfo::default());
     };
+    // each is written before it is read (z by the preconditioner, p from z, q by the
+    // product): sized, not zeroed
     for v in [&mut *z, &mut *p, &mut *q] {
-        v.clear();
         v.resize(n, 0.0);
     }
     let mut rz = precondition(r, z);
