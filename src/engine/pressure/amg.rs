@@ -416,59 +416,77 @@ impl Coarsest {
 fn diagonal(a: &CsrMatrix) -> Vec<Real> {
     let mut d = vec![0.0; a.n];
     // each entry from its own row, in column order: deterministic in parallel
-    for_rows(&mut d, |i, di| {
-        *di = (a.row_ptr[i]..a.row_ptr[i + 1])
-            .filter(|&k| a.col[k] as usize == i)
-            .map(|k| a.val[k])
-            .sum::<Real>()
-    });
+    for_rows(&mut d, |i, di| *di = row_diagonal(a, i));
     d
 }
 
-/// Gershgorin bound of the spectral radius of D⁻¹A (2 for the fine Laplacian).
-fn jacobi_radius(a: &CsrMatrix, diag: &[Real]) -> Real {
-    let row = |i: usize| {
-        let s: Real = (a.row_ptr[i]..a.row_ptr[i + 1])
-            .map(|k| a.val[k].abs())
-            .sum();
-        if diag[i] > 0.0 {
-            s / diag[i]
-        } else {
-            1.0
-        }
-    };
-    // a maximum does not depend on the order of the reduction: deterministic
-    if a.n < PARALLEL_ROWS {
-        (0..a.n).map(row).fold(1.0, Real::max)
+/// a_ii: the entries of row i in column i, summed in column order.
+#[inline]
+fn row_diagonal(a: &CsrMatrix, i: usize) -> Real {
+    (a.row_ptr[i]..a.row_ptr[i + 1])
+        .filter(|&k| a.col[k] as usize == i)
+        .map(|k| a.val[k])
+        .sum::<Real>()
+}
+
+/// Row i's Gershgorin radius of D⁻¹A, Σ_k |a_ik| / a_ii (1 where a_ii is not positive).
+#[inline]
+fn row_radius(a: &CsrMatrix, i: usize, diag: Real) -> Real {
+    let s: Real = (a.row_ptr[i]..a.row_ptr[i + 1])
+        .map(|k| a.val[k].abs())
+        .sum();
+    if diag > 0.0 {
+        s / diag
     } else {
-        (0..a.n)
-            .into_par_iter()
-            .with_min_len(1024)
-            .map(row)
-            .reduce(|| 1.0, Real::max)
+        1.0
     }
+}
+
+/// [`diagonal`] and the Gershgorin bound of the spectral radius of D⁻¹A (2 for the fine
+/// Laplacian) in one pass over the matrix; the bound's maximum does not depend on the
+/// order of the reduction, so it is deterministic in parallel.
+fn diagonal_and_radius(a: &CsrMatrix) -> (Vec<Real>, Real) {
+    let mut diag = vec![0.0; a.n];
+    let row = |i: usize, d: &mut Real| {
+        *d = row_diagonal(a, i);
+        row_radius(a, i, *d)
+    };
+    let radius = if a.n < PARALLEL_ROWS {
+        diag.iter_mut()
+            .enumerate()
+            .map(|(i, d)| row(i, d))
+            .fold(1.0, Real::max)
+    } else {
+        diag.par_iter_mut()
+            .with_min_len(1024)
+            .enumerate()
+            .map(|(i, d)| row(i, d))
+            .reduce(|| 1.0, Real::max)
+    };
+    (diag, radius)
 }
 
 /// ω/a_ii with ω = 4/(3ρ): damped Jacobi, convergent for SPD A (ω ρ < 2).
 fn jacobi_weights(a: &CsrMatrix) -> Vec<Real> {
-    let diag = diagonal(a);
-    let omega = 4.0 / (3.0 * jacobi_radius(a, &diag));
-    weights(&diag, omega)
+    let (diag, radius) = diagonal_and_radius(a);
+    weights(&diag, 4.0 / (3.0 * radius))
 }
 
 /// ω / a_ii of every row (0 where the diagonal is not positive).
 fn weights(diag: &[Real], omega: Real) -> Vec<Real> {
-    diag.iter()
-        .map(|&d| if d > 0.0 { omega / d } else { 0.0 })
-        .collect()
+    let weight = |&d: &Real| if d > 0.0 { omega / d } else { 0.0 };
+    if diag.len() < PARALLEL_ROWS {
+        diag.iter().map(weight).collect()
+    } else {
+        diag.par_iter().with_min_len(1024).map(weight).collect()
+    }
 }
 
 /// The smoother of a refitted level: the ω of its build, lowered if need be to 1.9/G of
 /// the new matrix so that the smoother stays convergent.
 fn refitted_weights(a: &CsrMatrix, omega: Real) -> Vec<Real> {
-    let diag = diagonal(a);
-    let omega = omega.min(1.9 / jacobi_radius(a, &diag));
-    weights(&diag, omega)
+    let (diag, radius) = diagonal_and_radius(a);
+    weights(&diag, omega.min(1.9 / radius))
 }
 
 /// Power iterations of [`largest_eigenvalue`].
@@ -650,13 +668,13 @@ impl Hierarchy {
         let mut levels = Vec::new();
         let mut current = Cow::Borrowed(a);
         while current.n > COARSEST && levels.len() < MAX_LEVELS {
-            let diag = diagonal(&current);
+            let (diag, radius) = diagonal_and_radius(&current);
             let (agg, nc) = aggregate(&current, &diag);
             if nc == 0 || nc as Real > MAX_COARSENING_RATIO * current.n as Real {
                 break;
             }
             let lambda = largest_eigenvalue(&current, &diag);
-            let omega = smoothing_weight(lambda, jacobi_radius(&current, &diag));
+            let omega = smoothing_weight(lambda, radius);
             // the prolongator's smoothing step as in Vaněk et al.: 4/(3λ)
             let p = smoothed_prolongator(&current, &diag, 4.0 / (3.0 * lambda), &agg, nc);
             let r = transpose(&p, nc);
