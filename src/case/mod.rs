@@ -84,8 +84,9 @@ pub struct Case {
     #[schemars(extend("minItems" = 1))]
     pub fluid_blocks: Vec<FluidBlock>,
     /// Where the fluid may be laid out coarser than `particle_spacing`: "auto" (the
-    /// default: fine around each moving body's path, twice as coarse elsewhere; uniform
-    /// without a moving body), "none" (one spacing everywhere) or {"fine": [boxes]}.
+    /// default: fine around each moving body's path, twice as coarse beyond, four times
+    /// as coarse far from it; uniform without a moving body), "none" (one spacing
+    /// everywhere) or {"fine": [boxes]} (twice as coarse outside them).
     #[serde(default, skip_serializing_if = "Refinement::is_auto")]
     pub refinement: Refinement,
     /// Fixed walls (open or closed polylines).

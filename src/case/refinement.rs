@@ -14,8 +14,8 @@ use serde::{Deserialize, Deserializer, Serialize, Serializer};
 pub enum Refinement {
     /// One spacing everywhere.
     None,
-    /// Fine around each moving body's swept path, twice as coarse elsewhere; one
-    /// spacing everywhere without a moving body.
+    /// Fine around each moving body's swept path, twice as coarse beyond and four times
+    /// as coarse far from it; one spacing everywhere without a moving body.
     #[default]
     Auto,
     /// Fine inside the given boxes, twice as coarse elsewhere.
@@ -45,8 +45,8 @@ enum Form {
 enum RefinementMode {
     /// One spacing everywhere.
     None,
-    /// Fine around each moving body's swept path, twice as coarse elsewhere; one
-    /// spacing everywhere without a moving body.
+    /// Fine around each moving body's swept path, twice as coarse beyond and four times
+    /// as coarse far from it; one spacing everywhere without a moving body.
     Auto,
 }
 

@@ -35,13 +35,28 @@ pub fn check(case_path: &Path, overrides: &[String], max_particles: Option<usize
         "particles: {particles} (estimate from block areas: {:.0})",
         estimated_particles(&case).unwrap_or(0.0)
     );
-    let coarse = scene.particles.scale.iter().filter(|&&s| s != 1.0).count();
-    if coarse > 0 {
+    let count = |level: f64| {
+        scene
+            .particles
+            .scale
+            .iter()
+            .filter(|&&s| s == level)
+            .count()
+    };
+    let (coarse, far) = (count(2.0), count(4.0));
+    let l0 = case.particle_spacing;
+    if far > 0 {
         println!(
-            "layout: multi-resolution, {} particles of {} m and {coarse} of {} m (refinement)",
+            "layout: multi-resolution, {} particles of {l0} m, {coarse} of {} m and {far} of {} m (refinement)",
+            particles - coarse - far,
+            2.0 * l0,
+            4.0 * l0
+        );
+    } else if coarse > 0 {
+        println!(
+            "layout: multi-resolution, {} particles of {l0} m and {coarse} of {} m (refinement)",
             particles - coarse,
-            case.particle_spacing,
-            2.0 * case.particle_spacing
+            2.0 * l0
         );
     } else {
         println!("layout: one spacing, {} m", case.particle_spacing);

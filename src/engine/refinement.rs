@@ -1,6 +1,7 @@
 //! The multi-resolution layout (`case.refinement`): the fluid lattice of spacing l0 is
 //! merged, 2 × 2 sites at a time, into particles of spacing 2 l0 wherever the load is
-//! not decided.
+//! not decided, and with `"auto"` those, 2 × 2 at a time, into particles of 4 l0 farther
+//! out.
 //!
 //! A coarse cell is a 2 l0 × 2 l0 square of the lattice anchored at the first
 //! particle. It becomes one particle of scale 2 at its centre, with the mean velocity of
@@ -11,17 +12,37 @@
 //! sits l0/2 from its own, so the virtual wall lattice of either (first row half a
 //! spacing behind the surface) continues it. The fine boxes come from the case
 //! ([`crate::case::layout`]).
+//!
+//! A third level (`far`): four coarse cells of one 4 l0 square, anchored at the same
+//! point, become one particle of scale 4 at its centre when the square touches no far
+//! box and every 2 l0 cell within [`far_clearance`] cells of it is a coarse cell. So a
+//! particle of 4 l0 has only 2 l0 particles within its reach: none of l0 (a pair of
+//! spacings 1 and 4 is not a jump the operators were checked across), no wall or free
+//! surface (those keep their finer rows, as above).
 
-pub use crate::case::layout::{fine_boxes, unsupported_by_multi_resolution, FineBox, AUTO_MARGIN};
+pub use crate::case::layout::{
+    far_boxes, far_clearance, fine_boxes, unsupported_by_multi_resolution, FineBox, AUTO_MARGIN,
+    FAR_MARGIN,
+};
 use crate::math::{Real, Vec2};
-use std::collections::HashMap;
+use std::collections::{HashMap, HashSet};
+
+/// Where the layout may go to 4 l0: outside `boxes`, for neighbour lists of `radius`
+/// (in spacings l0, the larger of r_e and the Laplacian's).
+#[derive(Debug, Clone, Copy)]
+pub struct FarLevel<'a> {
+    pub boxes: &'a [FineBox],
+    pub radius: Real,
+}
 
 /// Merge the lattice sites `(position, velocity)` of spacing `l0` into coarse cells
-/// outside `boxes` (module docs): positions, velocities and scales (1 or 2).
+/// outside `boxes`, and those into 4 l0 squares outside the `far` boxes (module docs):
+/// positions, velocities and scales (1, 2 or 4).
 pub fn coarsen(
     sites: Vec<(Vec2, Vec2)>,
     l0: Real,
     boxes: &[FineBox],
+    far: Option<FarLevel>,
 ) -> (Vec<Vec2>, Vec<Vec2>, Vec<Real>) {
     let Some(&(first, _)) = sites.first() else {
         return (Vec::new(), Vec::new(), Vec::new());
@@ -41,7 +62,7 @@ pub fn coarsen(
         }
     }
     let mut merged = vec![false; sites.len()];
-    let mut coarse: Vec<((i64, i64), Vec2)> = Vec::new();
+    let mut coarse: Cells = Vec::new();
     for (&(cx, cy), members) in &cells {
         let lo = anchor + Vec2::new(cx as Real, cy as Real) * cell;
         let hi = lo + Vec2::repeat(cell);
@@ -54,8 +75,12 @@ pub fn coarsen(
         }
         coarse.push(((cx, cy), velocity));
     }
-    // fine sites in their original order, then coarse cells row by row
     coarse.sort_by_key(|&((cx, cy), _)| (cy, cx));
+    let (coarse, coarser) = match far {
+        Some(far) => merge_far(coarse, anchor, cell, far),
+        None => (coarse, Vec::new()),
+    };
+    // fine sites in their original order, then coarse cells row by row, then squares
     let (mut pos, mut vel, mut scale) = (Vec::new(), Vec::new(), Vec::new());
     for (k, (p, v)) in sites.into_iter().enumerate() {
         if !merged[k] {
@@ -64,10 +89,57 @@ pub fn coarsen(
             scale.push(1.0);
         }
     }
-    for ((cx, cy), v) in coarse {
-        pos.push(anchor + (Vec2::new(cx as Real, cy as Real) + Vec2::repeat(0.5)) * cell);
-        vel.push(v);
-        scale.push(2.0);
+    for (level, cells) in [(1.0, coarse), (2.0, coarser)] {
+        for ((cx, cy), v) in cells {
+            let centre = (Vec2::new(cx as Real, cy as Real) + Vec2::repeat(0.5)) * (level * cell);
+            pos.push(anchor + centre);
+            vel.push(v);
+            scale.push(2.0 * level);
+        }
     }
     (pos, vel, scale)
+}
+
+/// Cells of one level: the key (column, row) of each from the anchor, and its velocity.
+type Cells = Vec<((i64, i64), Vec2)>;
+
+/// The coarse cells `coarse` (keys in cells of `cell` = 2 l0 from `anchor`, row by row)
+/// merged four at a time into 4 l0 squares where `far` allows (module docs): the cells
+/// left, row by row, and the squares (keys in 4 l0), row by row.
+fn merge_far(coarse: Cells, anchor: Vec2, cell: Real, far: FarLevel) -> (Cells, Cells) {
+    let present: HashSet<(i64, i64)> = coarse.iter().map(|c| c.0).collect();
+    let clear = far_clearance(far.radius);
+    let mut squares: HashMap<(i64, i64), Vec<usize>> = HashMap::new();
+    for (k, ((cx, cy), _)) in coarse.iter().enumerate() {
+        squares
+            .entry((cx.div_euclid(2), cy.div_euclid(2)))
+            .or_default()
+            .push(k);
+    }
+    let mut merged = vec![false; coarse.len()];
+    let mut coarser: Cells = Vec::new();
+    for (&(sx, sy), members) in &squares {
+        let lo = anchor + Vec2::new(sx as Real, sy as Real) * (2.0 * cell);
+        let hi = lo + Vec2::repeat(2.0 * cell);
+        if members.len() != 4 || far.boxes.iter().any(|b| b.touches_cell(lo, hi)) {
+            continue;
+        }
+        let (x0, y0) = (2 * sx - clear, 2 * sy - clear);
+        let (x1, y1) = (2 * sx + 1 + clear, 2 * sy + 1 + clear);
+        if !(y0..=y1).all(|y| (x0..=x1).all(|x| present.contains(&(x, y)))) {
+            continue;
+        }
+        let velocity = members.iter().map(|&k| coarse[k].1).sum::<Vec2>() / 4.0;
+        for &k in members {
+            merged[k] = true;
+        }
+        coarser.push(((sx, sy), velocity));
+    }
+    let left: Cells = coarse
+        .into_iter()
+        .zip(merged)
+        .filter_map(|(c, m)| (!m).then_some(c))
+        .collect();
+    coarser.sort_by_key(|&((cx, cy), _)| (cy, cx));
+    (left, coarser)
 }

@@ -4,6 +4,7 @@
 
 use super::params::MpsParameters;
 use super::particles::Particles;
+use super::refinement::FarLevel;
 use super::walls::{WallObject, WallState};
 use crate::case::{Case, FluidSide, Motion};
 use crate::geometry::{centroid, closest_on_segment, inside, WallShape};
@@ -213,12 +214,18 @@ pub fn build_scene_placed(case: &Case, params: &MpsParameters, phase: Option<Rea
     // 150 MB at the step's peak, 160k particles)
     pos.shrink_to_fit();
     vel.shrink_to_fit();
-    // 4. multi-resolution: 2 × 2 sites merged outside the fine boxes
+    // 4. multi-resolution: 2 × 2 sites merged outside the fine boxes, and 2 × 2 of those
+    // outside the far boxes
     let particles = match crate::case::layout::fine_boxes(case) {
         None => Particles::with_positions(pos, vel),
         Some(boxes) => {
-            let (pos, vel, scale) =
-                super::refinement::coarsen(pos.into_iter().zip(vel).collect(), l0, &boxes);
+            let far_boxes = crate::case::layout::far_boxes(case);
+            let far = far_boxes.as_deref().map(|boxes| FarLevel {
+                boxes,
+                radius: params.re.max(params.re_lap) / l0,
+            });
+            let sites = pos.into_iter().zip(vel).collect();
+            let (pos, vel, scale) = super::refinement::coarsen(sites, l0, &boxes, far);
             let mut particles = Particles::with_positions(pos, vel);
             particles.scale = scale;
             particles

@@ -526,15 +526,26 @@ fn check_reports_the_layout_of_each_spacing() {
     )
     .unwrap();
     let scene = build_scene(&case, &MpsParameters::new(&case));
-    let fine = scene.particles.scale.iter().filter(|&&s| s == 1.0).count();
-    let coarse = scene.particles.len() - fine;
-    assert!(fine > 0 && coarse > 0, "{fine} fine, {coarse} coarse");
+    let count = |level: f64| {
+        scene
+            .particles
+            .scale
+            .iter()
+            .filter(|&&s| s == level)
+            .count()
+    };
+    let (fine, coarse, far) = (count(1.0), count(2.0), count(4.0));
+    assert_eq!(fine + coarse + far, scene.particles.len());
+    assert!(
+        fine > 0 && coarse > 0 && far > 0,
+        "{fine} / {coarse} / {far}"
+    );
     let out = mpsfsi(&["check", wedge, "--set", "particle_spacing=0.02"]);
     let stdout = text(&out.stdout);
     assert!(out.status.success(), "{}", text(&out.stderr));
     assert!(
         stdout.contains(&format!(
-            "layout: multi-resolution, {fine} particles of 0.02 m and {coarse} of 0.04 m"
+            "layout: multi-resolution, {fine} particles of 0.02 m, {coarse} of 0.04 m and {far} of 0.08 m"
         )),
         "{stdout}"
     );

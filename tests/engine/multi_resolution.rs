@@ -2,11 +2,12 @@
 //! the scaled neighbour list is the brute-force one, and still water with a resolution
 //! jump across its column stays still with the exact load (the issue's criteria:
 //! tank load within 0.1 %, maximum speed below 1 mm/s over 2 s, net flux across the
-//! jump below 0.1 % of the fine region's volume).
+//! jump below 0.1 % of the fine region's volume); with the automatic layout's third
+//! level (4 l0) it stays as still.
 
 use mpsfsi::case::{parse_case_str, Limits, ValidCase};
 use mpsfsi::engine::neighbors::NeighborList;
-use mpsfsi::engine::refinement::{coarsen, FineBox};
+use mpsfsi::engine::refinement::{coarsen, FarLevel, FineBox};
 use mpsfsi::engine::resolution::Scales;
 use mpsfsi::engine::Simulation;
 use mpsfsi::math::Vec2;
@@ -24,6 +25,26 @@ const STILL: &str = r#"{
   "walls": [ { "name": "tank", "polyline": [[0.0, 0.7], [0.0, 0.0], [1.0, 0.0], [1.0, 0.7]] } ],
   "refinement": { "fine": [ { "min": [0.3, 0.2], "max": [0.7, 0.6] } ] },
   "time": { "end": 2.0, "cfl": 0.2, "max_dt": 0.0005 },
+  "output": { "load_interval": 0.01 }
+}"#;
+
+/// Still water 2 m × 0.6 m at 1 cm with the automatic layout: a box moving up at
+/// 0.1 mm/s in the air above the water's middle makes l0 around it, 2 l0 beyond and
+/// 4 l0 in the two far corners of the water.
+const STILL_THREE_LEVELS: &str = r#"{
+  "name": "still-water-three-levels",
+  "fluid": { "density": 1000.0, "kinematic_viscosity": 1.0e-6, "gravity": [0.0, -9.81] },
+  "particle_spacing": 0.01,
+  "domain": { "min": [-0.1, -0.1], "max": [2.1, 1.0] },
+  "fluid_blocks": [ { "polygon": [[0.0, 0.0], [2.0, 0.0], [2.0, 0.6], [0.0, 0.6]] } ],
+  "walls": [ { "name": "tank", "polyline": [[0.0, 0.8], [0.0, 0.0], [2.0, 0.0], [2.0, 0.8]] } ],
+  "bodies": [ {
+    "name": "box",
+    "polygon": [[-0.1, 0.0], [0.1, 0.0], [0.1, 0.05], [-0.1, 0.05]],
+    "position": [1.0, 0.65],
+    "motion": { "type": "prescribed", "velocity": [0.0, 1.0e-4] }
+  } ],
+  "time": { "end": 1.0, "cfl": 0.2, "max_dt": 0.0005 },
   "output": { "load_interval": 0.01 }
 }"#;
 
@@ -46,7 +67,7 @@ fn coarsening_partitions_the_fluid_and_keeps_the_fine_boxes_fine() {
     };
     // 41 × 30 sites: the last column has no partner, so it stays fine
     let sites = lattice(41, 30);
-    let (pos, vel, scale) = coarsen(sites, L0, &[fine]);
+    let (pos, vel, scale) = coarsen(sites, L0, &[fine], None);
     // the volume (sum of s²) is the number of sites: nothing lost, nothing doubled
     let volume: f64 = scale.iter().map(|s| s * s).sum();
     assert_eq!(volume, (41 * 30) as f64);
@@ -84,6 +105,67 @@ fn coarsening_partitions_the_fluid_and_keeps_the_fine_boxes_fine() {
     assert!(inside_box);
 }
 
+/// The third level: 4 l0 squares only outside the far box, centred on 4 × 4 sites, with
+/// no l0 particle and no edge of the water within their reach (4 r_e = 10 l0 of their
+/// centre), and the volume kept.
+#[test]
+fn a_third_level_keeps_its_reach_clear_of_finer_particles_and_of_the_edges() {
+    let (nx, ny) = (120, 80);
+    let fine = FineBox {
+        min: Vec2::new(0.3, 0.5),
+        max: Vec2::new(0.5, 0.8),
+    };
+    let far = FineBox {
+        min: Vec2::new(0.2, 0.4),
+        max: Vec2::new(0.6, 0.8),
+    };
+    let level = FarLevel {
+        boxes: &[far],
+        radius: 2.5,
+    };
+    let (pos, vel, scale) = coarsen(lattice(nx, ny), L0, &[fine], Some(level));
+    let volume: f64 = scale.iter().map(|s| s * s).sum();
+    assert_eq!(volume, (nx * ny) as f64);
+    let squares: Vec<usize> = (0..pos.len()).filter(|&i| scale[i] == 4.0).collect();
+    assert!(squares.len() > 100, "{} particles of 4 l0", squares.len());
+    let (w, h) = (nx as f64 * L0, ny as f64 * L0);
+    let reach = 4.0 * 2.5 * L0;
+    for &i in &squares {
+        let p = pos[i];
+        assert!(
+            !far.touches_cell(p - Vec2::repeat(2.0 * L0), p + Vec2::repeat(2.0 * L0)),
+            "{p:?} in the far box"
+        );
+        for c in [p.x, p.y] {
+            let k = c / L0;
+            assert!(
+                (k - k.round()).abs() < 1e-9 && k.round() as i64 % 4 == 2,
+                "{p:?}"
+            );
+        }
+        assert!(
+            p.x >= reach - 1e-9
+                && p.y >= reach - 1e-9
+                && w - p.x >= reach - 1e-9
+                && h - p.y >= reach - 1e-9,
+            "{p:?} within {reach} m of the water's edge"
+        );
+        for j in 0..pos.len() {
+            if (pos[j] - p).norm() < reach {
+                assert!(
+                    scale[j] >= 2.0,
+                    "an l0 particle at {:?} within reach of {p:?}",
+                    pos[j]
+                );
+            }
+        }
+        assert!((vel[i] - Vec2::new(0.1, 0.0)).norm() < 1e-12);
+    }
+    // without the far level the same sites give the two-level layout
+    let (_, _, two) = coarsen(lattice(nx, ny), L0, &[fine], None);
+    assert!(two.iter().all(|&s| s <= 2.0));
+}
+
 #[test]
 fn scaled_neighbour_list_is_the_brute_force_list_of_pair_radii() {
     let (pos, _, scale) = coarsen(
@@ -93,6 +175,7 @@ fn scaled_neighbour_list_is_the_brute_force_list_of_pair_radii() {
             min: Vec2::new(0.1, 0.1),
             max: Vec2::new(0.2, 0.2),
         }],
+        None,
     );
     // disorder, so distances fall on both sides of the pair radii
     let pos: Vec<Vec2> = pos
@@ -161,5 +244,41 @@ fn still_water_with_a_resolution_jump_stays_still_with_the_exact_load() {
         "max speed {max_speed:.2e} m/s, tank load within {:.5} %, flux {:.5} %",
         100.0 * worst_load,
         100.0 * flux
+    );
+}
+
+#[test]
+fn still_water_on_three_levels_stays_still_with_the_exact_load() {
+    let case = ValidCase::new(
+        parse_case_str(STILL_THREE_LEVELS).unwrap(),
+        &Limits::default(),
+    )
+    .unwrap();
+    let mut sim = Simulation::new(&case);
+    let s = sim.particles.scale.clone();
+    assert!(
+        s.contains(&1.0) && s.contains(&2.0) && s.contains(&4.0),
+        "three levels"
+    );
+    let weight: f64 = s.iter().map(|s| 1000.0 * (s * L0).powi(2) * 9.81).sum();
+    let tank = sim.wall_names().iter().position(|n| n == "tank").unwrap();
+    let (mut max_speed, mut worst_load): (f64, f64) = (0.0, 0.0);
+    while sim.time < case.time.end - 1e-12 {
+        let dt = sim.next_dt();
+        sim.step(dt).unwrap();
+        max_speed = max_speed.max(sim.max_particle_speed());
+        let load = -sim.loads[tank].force.y;
+        worst_load = worst_load.max((load / weight - 1.0).abs());
+    }
+    println!(
+        "three levels: max speed {max_speed:.2e} m/s, tank load within {:.5} %",
+        100.0 * worst_load
+    );
+    assert_eq!(sim.stats.removed, 0);
+    assert!(max_speed < 1e-3, "max speed {max_speed:.3e} m/s");
+    assert!(
+        worst_load < 1e-3,
+        "tank load off by {:.4} %",
+        100.0 * worst_load
     );
 }

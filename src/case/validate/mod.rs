@@ -26,6 +26,7 @@ mod geometry;
 mod names;
 mod scalars;
 
+use super::layout::{far_clearance, FineBox};
 use super::{Case, CaseError, Point};
 use crate::geometry::signed_area;
 use crate::math::{vec2, Vec2};
@@ -74,31 +75,44 @@ pub fn validate(case: &Case, limits: &Limits) -> Check {
 /// Estimated number of fluid particles: the summed fluid block areas / l0² (overlaps
 /// and the parts inside bodies counted, so an upper bound up to lattice rounding). On a
 /// multi-resolution layout the area outside the fine boxes counts at (2 l0)², except a
-/// band of 2 l0 along each block's boundary, where cut cells stay fine: 3 % above the
-/// layout of the shipped wedges. `None` when the case has no usable spacing.
+/// band of 2 l0 along each block's boundary, where cut cells stay fine; with a third
+/// level the area outside the far boxes counts at (4 l0)², except a band along the
+/// boundary as wide as a 4 l0 square's clearance. `None` when the case has no usable
+/// spacing.
 pub fn estimated_particles(case: &Case) -> Option<f64> {
     let l0 = case.particle_spacing;
     if !(l0.is_finite() && l0 > 0.0) {
         return None;
     }
     let boxes = super::layout::fine_boxes(case);
+    let far = super::layout::far_boxes(case);
+    let radius = case.scheme.radius.max(case.scheme.laplacian_radius());
     let cells: f64 = case
         .fluid_blocks
         .iter()
         .map(|b| {
             let poly = points(&b.polygon);
             let area = signed_area(&poly).abs();
+            let inside = |boxes: &[FineBox], band: f64| -> f64 {
+                let a: f64 = boxes
+                    .iter()
+                    .map(|bx| clipped_area(&poly, bx.min, bx.max))
+                    .sum();
+                (a + band * perimeter(&poly)).min(area)
+            };
             let fine = match &boxes {
                 None => area,
-                Some(boxes) => {
-                    let inside: f64 = boxes
-                        .iter()
-                        .map(|bx| clipped_area(&poly, bx.min, bx.max))
-                        .sum();
-                    (inside + 2.0 * l0 * perimeter(&poly)).min(area)
-                }
+                Some(boxes) => inside(boxes, 2.0 * l0),
             };
-            fine + 0.25 * (area - fine)
+            match &far {
+                None => fine + 0.25 * (area - fine),
+                // a 4 l0 square keeps its clearance of 2 l0 cells from the block's edge
+                Some(far) => {
+                    let band = (2 * far_clearance(radius) + 4) as f64 * l0;
+                    let within = inside(far, band).max(fine);
+                    fine + 0.25 * (within - fine) + 0.0625 * (area - within)
+                }
+            }
         })
         .sum();
     Some(cells / (l0 * l0))

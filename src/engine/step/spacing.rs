@@ -47,7 +47,7 @@ pub(super) fn keep_particles_apart(
     let rw = sim.config.method.wall_repulsion_distance * l0;
     if rw > 0.0 {
         // the particles within their safety distance of a wall, found in parallel (a
-        // dozen a step of 75k on the shipped wedge), then treated in index order
+        // dozen a step on the shipped wedge), then treated in index order
         let (contacts, scales) = (&sim.workspace.contacts, sim.scales());
         let close: Vec<usize> = (0..n)
             .into_par_iter()
