@@ -35,14 +35,7 @@ pub fn check(case_path: &Path, overrides: &[String], max_particles: Option<usize
         "particles: {particles} (estimate from block areas: {:.0})",
         estimated_particles(&case).unwrap_or(0.0)
     );
-    let count = |level: f64| {
-        scene
-            .particles
-            .scale
-            .iter()
-            .filter(|&&s| s == level)
-            .count()
-    };
+    let count = |scale: f64| scene.particles.count_of_scale(scale);
     let (coarse, far) = (count(2.0), count(4.0));
     let l0 = case.particle_spacing;
     if far > 0 {

@@ -39,6 +39,11 @@ impl Particles {
         self.position.is_empty()
     }
 
+    /// The number of particles of spacing `scale` l0.
+    pub fn count_of_scale(&self, scale: Real) -> usize {
+        self.scale.iter().filter(|&&s| s == scale).count()
+    }
+
     /// Keep the particles for which `keep[i]` is true, preserving order.
     pub fn retain(&mut self, keep: &[bool]) {
         fn filter<T: Copy>(v: &mut Vec<T>, keep: &[bool]) {

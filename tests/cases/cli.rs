@@ -526,14 +526,7 @@ fn check_reports_the_layout_of_each_spacing() {
     )
     .unwrap();
     let scene = build_scene(&case, &MpsParameters::new(&case));
-    let count = |level: f64| {
-        scene
-            .particles
-            .scale
-            .iter()
-            .filter(|&&s| s == level)
-            .count()
-    };
+    let count = |scale: f64| scene.particles.count_of_scale(scale);
     let (fine, coarse, far) = (count(1.0), count(2.0), count(4.0));
     assert_eq!(fine + coarse + far, scene.particles.len());
     assert!(

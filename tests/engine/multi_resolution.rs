@@ -59,6 +59,18 @@ fn lattice(nx: usize, ny: usize) -> Vec<(Vec2, Vec2)> {
     sites
 }
 
+/// `p` is the centre of a block of `sites` × `sites` lattice sites from the origin: each
+/// coordinate is (k + 1/2) `sites` l0 for a whole k.
+fn assert_centred(p: Vec2, sites: i64) {
+    for c in [p.x, p.y] {
+        let k = c / L0;
+        assert!(
+            (k - k.round()).abs() < 1e-9 && k.round() as i64 % sites == sites / 2,
+            "{p:?} is no centre of {sites} x {sites} sites"
+        );
+    }
+}
+
 #[test]
 fn coarsening_partitions_the_fluid_and_keeps_the_fine_boxes_fine() {
     let fine = FineBox {
@@ -83,13 +95,7 @@ fn coarsening_partitions_the_fluid_and_keeps_the_fine_boxes_fine() {
             "coarse particle at {p:?} inside the fine box"
         );
         // centred on 2 x 2 sites of the lattice: at odd multiples of l0
-        for c in [p.x, p.y] {
-            let k = c / L0;
-            assert!(
-                (k - k.round()).abs() < 1e-9 && k.round() as i64 % 2 == 1,
-                "{p:?}"
-            );
-        }
+        assert_centred(p, 2);
         assert!((vel[i] - Vec2::new(0.1, 0.0)).norm() < 1e-12);
     }
     // the unpaired last column and the fine box's cells stay fine
@@ -136,13 +142,7 @@ fn a_third_level_keeps_its_reach_clear_of_finer_particles_and_of_the_edges() {
             !far.touches_cell(p - Vec2::repeat(2.0 * L0), p + Vec2::repeat(2.0 * L0)),
             "{p:?} in the far box"
         );
-        for c in [p.x, p.y] {
-            let k = c / L0;
-            assert!(
-                (k - k.round()).abs() < 1e-9 && k.round() as i64 % 4 == 2,
-                "{p:?}"
-            );
-        }
+        assert_centred(p, 4);
         assert!(
             p.x >= reach - 1e-9
                 && p.y >= reach - 1e-9

@@ -55,7 +55,7 @@ fn surge_front_follows_martin_and_moyce_across_a_resolution_jump() {
         ],
     );
     let sim = Simulation::new(&case);
-    let coarse = sim.particles.scale.iter().filter(|&&s| s == 2.0).count();
+    let coarse = sim.particles.count_of_scale(2.0);
     assert!(
         coarse >= 500 && coarse < sim.particles.len(),
         "{coarse} of {} particles coarse",
