@@ -186,8 +186,7 @@ fn user_wedge_40_degrees_with_defaults() {
 /// the axis, so the four-offset mean is what is held. The first step (0.163 ms, 3.6 % of
 /// the entry) puts t0 late, which alone reads +5.8 % (docs/validation.md, Known limits:
 /// the first step and the onset reading). Reads +10.2 ± 1.2 % (+8.8, +10.9, +13.2,
-/// +8.0 %); held to 12 %, the reading plus 1.5 of its standard errors, as it read
-/// +9.9 ± 1.6 % on the two-level layout.
+/// +8.0 %); held to 12 %, the reading plus 1.5 of its standard errors.
 #[test]
 fn user_wedge_10_degrees_with_defaults() {
     let (c, se) = offset_ensemble(10.0, 0.005, 0.2);

@@ -8,9 +8,9 @@
 //! added mass passes its own mass during the entry) at 5 mm, 100 spacings across as
 //! the README asks of an impact: impulse within 2 %. Both runs take the free fall's fine
 //! boxes, so that they run on one particle layout: the automatic layouts follow each
-//! run's own path (ballistic, or the table) and differ in their 4 l0 region, which made
-//! the heavy pair read +2.5 %. On one layout they read -0.4 % (241 kg/m) and +0.9 %
-//! (60.25 kg/m).
+//! run's own path (ballistic, or the table), differ in their 4 l0 region and so draw
+//! the load's noise twice (the heavy pair reads +2.5 % on them). On one layout they
+//! read -0.4 % (241 kg/m) and +0.9 % (60.25 kg/m).
 
 use super::common::{run_case_rows, shipped};
 use mpsfsi::case::layout::fine_boxes;

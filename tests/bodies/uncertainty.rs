@@ -113,7 +113,7 @@ fn ladder_against_similarity(name: &str, case: &ValidCase, c_f: f64) -> Reading 
 /// issue's 10 % is not met: see docs/uncertainty.md), 3.01 particle-step runs: the
 /// automatic layout's 4 l0 level takes more off the user's run than off the coarser
 /// levels, whose 4 l0 squares keep a clearance from the water's edges that is wider in
-/// metres (2.87 runs on the two-level layout).
+/// metres.
 #[test]
 fn the_wedge_band_holds_the_similarity_force() {
     let r = wedge_with_uncertainty("uncertainty_wedge_1cm", &["particle_spacing=0.01".into()]);

@@ -358,8 +358,8 @@ impl PressureProfile {
 /// the wedge) read, over the steps at which they sit between the keel and z/(Vt) = 0.3,
 /// the similarity solution's mean within 7 % below 60 % of the height and 15 % above it,
 /// the tolerances of the user-style family's four-run means (tests/bodies/gauges.rs): the
-/// 65 % gauge sits there for about a hundred steps, and one run's mean moves by ±8 %
-/// with the layout (measured +0.1 / −1.4 / −4.7 / −9.6 %). They wet before the maximum
+/// 65 % gauge sits there for about a hundred steps, and one run's mean scatters by
+/// several points (measured +0.1 / −1.4 / −4.7 / −9.6 %). They wet before the maximum
 /// passes them, after 0.7 of that time. Their single steps
 /// scatter about it by 21–28 % of the peak (RMS), so their largest step is no reading of
 /// the peak (19.5–31 against 6.927: docs/validation.md).
