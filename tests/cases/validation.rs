@@ -835,7 +835,7 @@ fn an_array_where_the_schema_has_an_object_is_rejected_with_its_path() {
 
 /// The case README.md shows a new user ("Case format") is valid, follows the README's own
 /// advice for an impact (B/l0 >= 100, a tank 8B x 2.4B) and gets the particle count the
-/// README states (54k, within 5 %).
+/// README states (42k, within 5 %).
 #[test]
 fn the_readme_example_case_is_valid_and_follows_its_advice() {
     let readme =
@@ -863,13 +863,13 @@ fn the_readme_example_case_is_valid_and_follows_its_advice() {
         width >= 8.0 * breadth - 1e-9 && depth >= 2.4 * breadth - 1e-9,
         "tank {width} x {depth}"
     );
-    // the README says 54k particles
+    // the README says 42k particles
     let params = mpsfsi::engine::params::MpsParameters::new(&case);
     let particles = mpsfsi::engine::scene::build_scene(&case, &params)
         .particles
         .len() as f64;
     assert!(
-        (particles / 54_000.0 - 1.0).abs() < 0.05,
+        (particles / 42_000.0 - 1.0).abs() < 0.05,
         "{particles} particles"
     );
 }

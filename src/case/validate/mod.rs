@@ -75,7 +75,9 @@ pub fn validate(case: &Case, limits: &Limits) -> Check {
 /// Estimated number of fluid particles: the summed fluid block areas / l0² (overlaps
 /// and the parts inside bodies counted, so an upper bound up to lattice rounding). On a
 /// multi-resolution layout the area outside the fine boxes counts at (2 l0)², except a
-/// band of 2 l0 along each block's boundary, where cut cells stay fine; with a third
+/// band along each block's boundary where cut cells stay fine (2 l0 wide along a slanted
+/// edge; l0 along an axis-aligned one, where at most the last row of sites is left over
+/// when the block's rows or columns are odd in number); with a third
 /// level the area outside the far boxes counts at (4 l0)², except a band along the
 /// boundary as wide as a 4 l0 square's clearance. `None` when the case has no usable
 /// spacing.
@@ -98,17 +100,17 @@ pub fn estimated_particles(case: &Case) -> Option<f64> {
                     .iter()
                     .map(|bx| clipped_area(&poly, bx.min, bx.max))
                     .sum();
-                (a + band * perimeter(&poly)).min(area)
+                (a + band).min(area)
             };
             let fine = match &boxes {
                 None => area,
-                Some(boxes) => inside(boxes, 2.0 * l0),
+                Some(boxes) => inside(boxes, cut_cell_band(&poly, l0)),
             };
             match &far {
                 None => fine + 0.25 * (area - fine),
                 // a 4 l0 square keeps its clearance of 2 l0 cells from the block's edge
                 Some(far) => {
-                    let band = (2 * far_clearance(radius) + 4) as f64 * l0;
+                    let band = (2 * far_clearance(radius) + 4) as f64 * l0 * perimeter(&poly);
                     let within = inside(far, band).max(fine);
                     fine + 0.25 * (within - fine) + 0.0625 * (area - within)
                 }
@@ -116,6 +118,18 @@ pub fn estimated_particles(case: &Case) -> Option<f64> {
         })
         .sum();
     Some(cells / (l0 * l0))
+}
+
+/// The area along a block's boundary whose 2 l0 cells may stay fine: l0 wide along an
+/// axis-aligned edge, 2 l0 along a slanted one.
+fn cut_cell_band(poly: &[Vec2], l0: f64) -> f64 {
+    (0..poly.len())
+        .map(|k| {
+            let d = poly[(k + 1) % poly.len()] - poly[k];
+            let aligned = d.x.abs() < 1e-12 * d.norm() || d.y.abs() < 1e-12 * d.norm();
+            d.norm() * if aligned { l0 } else { 2.0 * l0 }
+        })
+        .sum()
 }
 
 fn perimeter(poly: &[Vec2]) -> f64 {
