@@ -95,7 +95,8 @@ impl CellGrid {
     /// `reach` cells of it (0 where there is none): a separable running maximum.
     pub fn dilated_max(&self, reach: isize, value: impl Fn(usize) -> Real + Sync) -> Vec<Real> {
         // rows in parallel (a step of the shipped wedge dilates 48 000 cells 4 out: a
-        // millisecond on one thread, beside a list of 7); a maximum has no order
+        // millisecond on one thread, against 7 ms for its whole list); a maximum has no
+        // order, so the result is the same on any number of threads
         let (nx, ny) = (self.nx, self.ny);
         let mut own = vec![0.0; nx * ny];
         own.par_iter_mut().enumerate().for_each(|(c, m)| {
@@ -209,20 +210,16 @@ impl NeighborList {
             let s_near = partner_scale[cy * grid.nx + cx];
             let s_i = scales.of(i);
             let reach = (0.5 * (s_i + s_near) * radius / cell - 1e-9).ceil() as isize;
-            if s_i == s_min && s_near == s_min {
-                // every partner within reach is of the finest level: one radius for the
-                // row, the pair radius of each without looking up its scale (two thirds
-                // of the shipped wedge's particles)
-                let r2 = (radius * s_min) * (radius * s_min);
-                grid.for_each_near(xi, reach.max(1), |j| {
-                    if j != i && (positions[j] - xi).norm_squared() < r2 {
-                        idx.push(j as u32);
-                    }
-                });
-                return;
-            }
+            // a row whose partners within reach are all of the finest level (over half of
+            // the shipped wedge's particles) has one pair radius: no scale to look up
+            let uniform = s_i == s_min && s_near == s_min;
+            let r_row = radius * s_min;
             grid.for_each_near(xi, reach.max(1), |j| {
-                let rj = radius * scales.pair(i, j).0;
+                let rj = if uniform {
+                    r_row
+                } else {
+                    radius * scales.pair(i, j).0
+                };
                 if j != i && (positions[j] - xi).norm_squared() < rj * rj {
                     idx.push(j as u32);
                 }
