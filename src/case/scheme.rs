@@ -441,4 +441,9 @@ impl Scheme {
             _ => self.radius,
         })
     }
+
+    /// r_e/l0 of the neighbour list: the larger of the two radii.
+    pub fn neighbour_radius(&self) -> f64 {
+        self.radius.max(self.laplacian_radius())
+    }
 }

@@ -43,6 +43,11 @@ pub struct MpsParameters {
 }
 
 impl MpsParameters {
+    /// Radius of the neighbour list: the larger of r_e and the Laplacian's.
+    pub fn neighbour_radius(&self) -> Real {
+        self.re.max(self.re_lap)
+    }
+
     pub fn new(case: &Case) -> Self {
         Self::from_scheme(
             case.particle_spacing,

@@ -75,7 +75,7 @@ pub fn fill_polygon(polygon: &[Vec2], l0: Real) -> Vec<Vec2> {
 
 /// Thickness given to open wall polylines: deeper than any kernel reach.
 pub fn wall_thickness(params: &MpsParameters) -> Real {
-    2.0 * params.re.max(params.re_lap) + 2.0 * params.l0
+    2.0 * params.neighbour_radius() + 2.0 * params.l0
 }
 
 /// World-frame state of body `b` at t = 0.
@@ -164,7 +164,7 @@ pub fn build_scene_placed(case: &Case, params: &MpsParameters, phase: Option<Rea
                 &pts,
                 wall.closed,
                 &candidates,
-                2.0 * params.re.max(params.re_lap),
+                2.0 * params.neighbour_radius(),
             ),
         };
         walls.push(WallObject {
@@ -222,7 +222,7 @@ pub fn build_scene_placed(case: &Case, params: &MpsParameters, phase: Option<Rea
             let far_boxes = crate::case::layout::far_boxes(case);
             let far = far_boxes.as_deref().map(|boxes| FarLevel {
                 boxes,
-                radius: params.re.max(params.re_lap) / l0,
+                radius: params.neighbour_radius() / l0,
             });
             let sites = pos.into_iter().zip(vel).collect();
             let (pos, vel, scale) = super::refinement::coarsen(sites, l0, &boxes, far);

@@ -88,7 +88,7 @@ pub fn estimated_particles(case: &Case) -> Option<f64> {
     }
     let boxes = super::layout::fine_boxes(case);
     let far = super::layout::far_boxes(case);
-    let radius = case.scheme.radius.max(case.scheme.laplacian_radius());
+    let radius = case.scheme.neighbour_radius();
     let cells: f64 = case
         .fluid_blocks
         .iter()

@@ -15,7 +15,7 @@ use crate::math::{Real, Vec2};
 /// multi-resolution), written into `pairs` (a buffer to reuse).
 pub(super) fn neighbor_list(sim: &Simulation, x: &[Vec2], mut pairs: Vec<u32>) -> NeighborList {
     let params = &sim.config.params;
-    let radius = params.re.max(params.re_lap);
+    let radius = params.neighbour_radius();
     // room for the last list's pairs and a twentieth more: particles move a fraction of
     // a spacing a step
     let last = sim.workspace.neighbors.pair_count();
