@@ -479,6 +479,34 @@ fn the_particle_estimate_counts_the_multi_resolution_layout() {
     assert_error(&e, "particle_spacing", "exceed the limit");
 }
 
+/// The scene takes the far level's clearance from the scheme's radius in spacings, as
+/// the estimate does: at l0 = 3.7 mm, where (2.5 l0) / l0 rounds one ulp above 2.5, the
+/// shipped wedge's layout has the particles of its neighbour spacing 3.7 mm + 0.01 µm
+/// (the same lattice, the clearance exact) to within a lattice row, not a 2 l0 cell's
+/// ring more along the far boxes.
+#[test]
+fn the_far_clearance_does_not_depend_on_round_off_of_the_spacing() {
+    let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("cases/wedge_30deg_constant_velocity.json");
+    let built = |l0: f64| {
+        let mut case = mpsfsi::case::load_case_file(&path, &[]).unwrap();
+        case.particle_spacing = l0;
+        let params = mpsfsi::engine::params::MpsParameters::new(&case);
+        let n = mpsfsi::engine::scene::build_scene(&case, &params)
+            .particles
+            .len() as f64;
+        (n, mpsfsi::case::estimated_particles(&case).unwrap())
+    };
+    assert!(2.5 * 0.0037 / 0.0037 > 2.5, "the spacing must round up");
+    let (odd, odd_estimate) = built(0.0037);
+    let (exact, _) = built(0.003_700_000_01);
+    assert!(
+        (odd - exact).abs() < 0.002 * exact,
+        "{odd} particles at 3.7 mm against {exact}"
+    );
+    assert!(odd_estimate >= odd, "estimate {odd_estimate:.0} for {odd}");
+}
+
 #[test]
 fn non_positive_output_intervals() {
     assert_error(
