@@ -26,6 +26,24 @@ pub const AUTO_MARGIN: Real = 0.75;
 /// docs/method.md).
 pub const FAR_MARGIN: Real = 0.5;
 
+/// The rows of a fluid block of height `height` at spacing `l0`: how many, and their
+/// pitch. A height that is a whole number of spacings keeps l0; any other is filled
+/// with one row more, pressed together to fit, so that the block's top and bottom are
+/// where the case draws them (a free surface half a pitch above the top row). Filled at
+/// l0 from the bottom, a 1.1 m tank at 12 mm left its surface 8 mm low, and the 25° drop
+/// test touched the water 1.6 ms late: its velocity read 10.3 % from the experiment's
+/// against 7.5 % with the surface in place. The pitch is at least (1 − 1/rows) l0 (0.36 %
+/// less there): pressed, not stretched, so that no interior row reads as free surface.
+pub fn block_rows(height: Real, l0: Real) -> (i64, Real) {
+    let spacings = height / l0;
+    let whole = (spacings + 1e-9).floor();
+    if spacings - whole <= 1e-9 {
+        return (whole as i64, l0);
+    }
+    let rows = whole + 1.0;
+    (rows as i64, height / rows)
+}
+
 /// The 2 l0 cells around a 4 l0 particle's square that must be coarse: its reach of
 /// 4 radius l0 from the centre, 2 l0 from the square's edge, in cells of 2 l0 (4 cells
 /// at r_e = 2.5 l0). That also keeps l0 particles beyond the pair radius 2.5 radius l0

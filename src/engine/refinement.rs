@@ -35,28 +35,29 @@ pub struct FarLevel<'a> {
     pub radius: Real,
 }
 
-/// Merge the lattice sites `(position, velocity)` of spacing `l0` into coarse cells
-/// outside `boxes`, and those into 4 l0 squares outside the `far` boxes (module docs):
-/// positions, velocities and scales (1, 2 or 4).
+/// Merge the lattice sites `(position, velocity)` of `pitch` (columns l0 apart, rows l0
+/// or a little less, `case::layout::block_rows`) into coarse cells outside `boxes`, and
+/// those into squares of four cells outside the `far` boxes (module docs): positions,
+/// velocities and scales (1, 2 or 4).
 pub fn coarsen(
     sites: Vec<(Vec2, Vec2)>,
-    l0: Real,
+    pitch: Vec2,
     boxes: &[FineBox],
     far: Option<FarLevel>,
 ) -> (Vec<Vec2>, Vec<Vec2>, Vec<Real>) {
     let Some(&(first, _)) = sites.first() else {
         return (Vec::new(), Vec::new(), Vec::new());
     };
-    let cell = 2.0 * l0;
-    let anchor = first - Vec2::repeat(0.5 * l0);
+    let cell = 2.0 * pitch;
+    let anchor = first - 0.5 * pitch;
     let key = |p: Vec2| {
-        let q = (p - anchor) / cell;
+        let q = (p - anchor).component_div(&cell);
         (q.x.floor() as i64, q.y.floor() as i64)
     };
     // the sites of each cell that sit exactly on the anchored lattice
     let mut cells: HashMap<(i64, i64), Vec<usize>> = HashMap::new();
     for (k, (p, _)) in sites.iter().enumerate() {
-        let q = (p - anchor) / l0 - Vec2::repeat(0.5);
+        let q = (p - anchor).component_div(&pitch) - Vec2::repeat(0.5);
         if (q.x - q.x.round()).abs() < 1e-6 && (q.y - q.y.round()).abs() < 1e-6 {
             cells.entry(key(*p)).or_default().push(k);
         }
@@ -64,8 +65,8 @@ pub fn coarsen(
     let mut merged = vec![false; sites.len()];
     let mut coarse: Cells = Vec::new();
     for (&(cx, cy), members) in &cells {
-        let lo = anchor + Vec2::new(cx as Real, cy as Real) * cell;
-        let hi = lo + Vec2::repeat(cell);
+        let lo = anchor + Vec2::new(cx as Real, cy as Real).component_mul(&cell);
+        let hi = lo + cell;
         if members.len() != 4 || boxes.iter().any(|b| b.touches_cell(lo, hi)) {
             continue;
         }
@@ -91,7 +92,8 @@ pub fn coarsen(
     }
     for (level, cells) in [(1.0, coarse), (2.0, coarser)] {
         for ((cx, cy), v) in cells {
-            let centre = (Vec2::new(cx as Real, cy as Real) + Vec2::repeat(0.5)) * (level * cell);
+            let centre = (Vec2::new(cx as Real, cy as Real) + Vec2::repeat(0.5))
+                .component_mul(&(level * cell));
             pos.push(anchor + centre);
             vel.push(v);
             scale.push(2.0 * level);
@@ -103,10 +105,10 @@ pub fn coarsen(
 /// Cells of one level: the key (column, row) of each from the anchor, and its velocity.
 type Cells = Vec<((i64, i64), Vec2)>;
 
-/// The coarse cells `coarse` (keys in cells of `cell` = 2 l0 from `anchor`, row by row)
+/// The coarse cells `coarse` (keys in cells of `cell` = 2 pitch from `anchor`, row by row)
 /// merged four at a time into 4 l0 squares where `far` allows (module docs): the cells
 /// left, row by row, and the squares (keys in 4 l0), row by row.
-fn merge_far(coarse: Cells, anchor: Vec2, cell: Real, far: FarLevel) -> (Cells, Cells) {
+fn merge_far(coarse: Cells, anchor: Vec2, cell: Vec2, far: FarLevel) -> (Cells, Cells) {
     let present: HashSet<(i64, i64)> = coarse.iter().map(|c| c.0).collect();
     let clear = far_clearance(far.radius);
     let mut squares: HashMap<(i64, i64), Vec<usize>> = HashMap::new();
@@ -119,8 +121,8 @@ fn merge_far(coarse: Cells, anchor: Vec2, cell: Real, far: FarLevel) -> (Cells, 
     let mut merged = vec![false; coarse.len()];
     let mut coarser: Cells = Vec::new();
     for (&(sx, sy), members) in &squares {
-        let lo = anchor + Vec2::new(sx as Real, sy as Real) * (2.0 * cell);
-        let hi = lo + Vec2::repeat(2.0 * cell);
+        let lo = anchor + Vec2::new(sx as Real, sy as Real).component_mul(&(2.0 * cell));
+        let hi = lo + 2.0 * cell;
         if members.len() != 4 || far.boxes.iter().any(|b| b.touches_cell(lo, hi)) {
             continue;
         }

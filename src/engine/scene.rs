@@ -49,8 +49,10 @@ pub struct Scene {
     pub domain_max: Vec2,
 }
 
-/// Lattice points of spacing l0 inside `polygon`, anchored half a spacing from its lower-left bound.
-pub fn fill_polygon(polygon: &[Vec2], l0: Real) -> Vec<Vec2> {
+/// Lattice points inside `polygon`, anchored half a spacing from its lower-left bound:
+/// columns l0 apart, rows at the pitch [`crate::case::layout::block_rows`] gives its
+/// height (l0 when the height is whole spacings). Returns the points and the row pitch.
+pub fn fill_polygon(polygon: &[Vec2], l0: Real) -> (Vec<Vec2>, Real) {
     let n = polygon.len();
     let edges: Vec<[Vec2; 2]> = (0..n).map(|k| [polygon[k], polygon[(k + 1) % n]]).collect();
     let mut lo = Vec2::repeat(Real::INFINITY);
@@ -60,17 +62,17 @@ pub fn fill_polygon(polygon: &[Vec2], l0: Real) -> Vec<Vec2> {
         hi = hi.sup(p);
     }
     let nx = ((hi.x - lo.x) / l0 + 1e-9).floor() as i64;
-    let ny = ((hi.y - lo.y) / l0 + 1e-9).floor() as i64;
+    let (ny, dy) = crate::case::layout::block_rows(hi.y - lo.y, l0);
     let mut pts = Vec::new();
     for j in 0..ny.max(0) {
         for i in 0..nx.max(0) {
-            let p = Vec2::new(lo.x + (i as Real + 0.5) * l0, lo.y + (j as Real + 0.5) * l0);
+            let p = Vec2::new(lo.x + (i as Real + 0.5) * l0, lo.y + (j as Real + 0.5) * dy);
             if inside(p, &edges) {
                 pts.push(p);
             }
         }
     }
-    pts
+    (pts, dy)
 }
 
 /// Thickness given to open wall polylines: deeper than any kernel reach.
@@ -124,9 +126,15 @@ pub fn build_scene_placed(case: &Case, params: &MpsParameters, phase: Option<Rea
     // 1. candidate fluid particles, one per lattice site even where blocks overlap
     let mut seen: HashSet<(i64, i64)> = HashSet::new();
     let mut candidates: Vec<(Vec2, Vec2)> = Vec::new();
+    // the row pitch of the first block: the multi-resolution layout merges its lattice
+    let mut row_pitch = None;
     for block in &case.fluid_blocks {
         let poly: Vec<Vec2> = block.polygon.iter().map(|p| vec2(*p)).collect();
-        for p in fill_polygon(&poly, l0) {
+        let (points, dy) = fill_polygon(&poly, l0);
+        if !points.is_empty() {
+            row_pitch.get_or_insert(dy);
+        }
+        for p in points {
             let key = (
                 (p.x / (0.25 * l0)).round() as i64,
                 (p.y / (0.25 * l0)).round() as i64,
@@ -228,7 +236,12 @@ pub fn build_scene_placed(case: &Case, params: &MpsParameters, phase: Option<Rea
                 radius: case.scheme.neighbour_radius(),
             });
             let sites = pos.into_iter().zip(vel).collect();
-            let (pos, vel, scale) = super::refinement::coarsen(sites, l0, &boxes, far);
+            let (pos, vel, scale) = super::refinement::coarsen(
+                sites,
+                Vec2::new(l0, row_pitch.unwrap_or(l0)),
+                &boxes,
+                far,
+            );
             let mut particles = Particles::with_positions(pos, vel);
             particles.scale = scale;
             particles

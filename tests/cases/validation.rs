@@ -507,6 +507,79 @@ fn the_far_clearance_does_not_depend_on_round_off_of_the_spacing() {
     assert!(odd_estimate >= odd, "estimate {odd_estimate:.0} for {odd}");
 }
 
+/// A fluid block whose height is not a whole number of spacings keeps its top and
+/// bottom where the case draws them: the 25° drop test's 1.1 m tank at 12 mm (91.67
+/// spacings) fills 92 rows pressed to 11.957 mm, the top row half a pitch below the
+/// still surface (y = 0) and the bottom row half a pitch above the floor. Filled at
+/// l0 from the floor, the top row sat at −14 mm and the surface 8 mm low. The
+/// multi-resolution layout still merges the pressed lattice: the shipped wedge with its
+/// tank 1.203 m deep (240.6 spacings) has under a third of the uniform count, as at
+/// 1.2 m, and the estimate bounds it.
+#[test]
+fn a_fluid_block_keeps_its_surface_whatever_its_height() {
+    let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR"));
+    let drop = mpsfsi::case::load_case_file(
+        &root.join("tests/data/drop_tests/wedge_25deg_94kg.json"),
+        &[],
+    )
+    .unwrap();
+    let params = mpsfsi::engine::params::MpsParameters::new(&drop);
+    let scene = mpsfsi::engine::scene::build_scene(&drop, &params);
+    let ys = scene.particles.position.iter().map(|p| p.y);
+    let (lo, hi) = ys.fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), y| {
+        (lo.min(y), hi.max(y))
+    });
+    let pitch = 1.1 / 92.0;
+    assert!((hi + 0.5 * pitch).abs() < 1e-9, "top row at {hi}");
+    assert!(
+        (lo - (-1.1 + 0.5 * pitch)).abs() < 1e-9,
+        "bottom row at {lo}"
+    );
+
+    let wedge = |depth: f64| {
+        let mut case = mpsfsi::case::load_case_file(
+            &root.join("cases/wedge_30deg_constant_velocity.json"),
+            &[],
+        )
+        .unwrap();
+        for p in case.fluid_blocks[0].polygon.iter_mut() {
+            if p[1] < -1.0 {
+                p[1] = -depth;
+            }
+        }
+        for w in case.walls.iter_mut() {
+            for p in w.polyline.iter_mut() {
+                if p[1] < -1.0 {
+                    p[1] = -depth;
+                }
+            }
+        }
+        let params = mpsfsi::engine::params::MpsParameters::new(&case);
+        let built = mpsfsi::engine::scene::build_scene(&case, &params);
+        let top = built
+            .particles
+            .position
+            .iter()
+            .map(|p| p.y)
+            .fold(f64::NEG_INFINITY, f64::max);
+        let estimate = mpsfsi::case::estimated_particles(&case).unwrap();
+        (built.particles.len() as f64, top, estimate)
+    };
+    let (whole, whole_top, _) = wedge(1.2);
+    let (pressed, pressed_top, estimate) = wedge(1.203);
+    let uniform = 4.0 * 1.203 / (0.005 * 0.005);
+    assert!(
+        pressed < uniform / 3.0,
+        "{pressed} particles against {uniform} uniform"
+    );
+    assert!(
+        (pressed - whole).abs() < 0.02 * whole,
+        "{pressed} particles at 1.203 m against {whole} at 1.2 m"
+    );
+    assert!((whole_top + 0.0025).abs() < 1e-9 && (pressed_top + 0.5 * 1.203 / 241.0).abs() < 1e-9);
+    assert!(estimate >= pressed, "estimate {estimate:.0} for {pressed}");
+}
+
 #[test]
 fn non_positive_output_intervals() {
     assert_error(

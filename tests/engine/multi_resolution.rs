@@ -79,7 +79,7 @@ fn coarsening_partitions_the_fluid_and_keeps_the_fine_boxes_fine() {
     };
     // 41 × 30 sites: the last column has no partner, so it stays fine
     let sites = lattice(41, 30);
-    let (pos, vel, scale) = coarsen(sites, L0, &[fine], None);
+    let (pos, vel, scale) = coarsen(sites, Vec2::repeat(L0), &[fine], None);
     // the volume (sum of s²) is the number of sites: nothing lost, nothing doubled
     let volume: f64 = scale.iter().map(|s| s * s).sum();
     assert_eq!(volume, (41 * 30) as f64);
@@ -129,7 +129,7 @@ fn a_third_level_keeps_its_reach_clear_of_finer_particles_and_of_the_edges() {
         boxes: &[far],
         radius: 2.5,
     };
-    let (pos, vel, scale) = coarsen(lattice(nx, ny), L0, &[fine], Some(level));
+    let (pos, vel, scale) = coarsen(lattice(nx, ny), Vec2::repeat(L0), &[fine], Some(level));
     let volume: f64 = scale.iter().map(|s| s * s).sum();
     assert_eq!(volume, (nx * ny) as f64);
     let squares: Vec<usize> = (0..pos.len()).filter(|&i| scale[i] == 4.0).collect();
@@ -162,7 +162,7 @@ fn a_third_level_keeps_its_reach_clear_of_finer_particles_and_of_the_edges() {
         assert!((vel[i] - Vec2::new(0.1, 0.0)).norm() < 1e-12);
     }
     // without the far level the same sites give the two-level layout
-    let (_, _, two) = coarsen(lattice(nx, ny), L0, &[fine], None);
+    let (_, _, two) = coarsen(lattice(nx, ny), Vec2::repeat(L0), &[fine], None);
     assert!(two.iter().all(|&s| s <= 2.0));
 }
 
@@ -170,7 +170,7 @@ fn a_third_level_keeps_its_reach_clear_of_finer_particles_and_of_the_edges() {
 fn scaled_neighbour_list_is_the_brute_force_list_of_pair_radii() {
     let (pos, _, scale) = coarsen(
         lattice(30, 30),
-        L0,
+        Vec2::repeat(L0),
         &[FineBox {
             min: Vec2::new(0.1, 0.1),
             max: Vec2::new(0.2, 0.2),

@@ -72,8 +72,9 @@ pub fn validate(case: &Case, limits: &Limits) -> Check {
     Ok(())
 }
 
-/// Estimated number of fluid particles: the summed fluid block areas / l0² (overlaps
-/// and the parts inside bodies counted, so an upper bound up to lattice rounding). On a
+/// Estimated number of fluid particles: the summed fluid block areas / l0², each scaled
+/// by l0 over its row pitch (`layout::block_rows`; overlaps and the parts inside bodies
+/// counted, so an upper bound up to lattice rounding). On a
 /// multi-resolution layout the area outside the fine boxes counts at (2 l0)², except a
 /// band along each block's boundary where cut cells stay fine (2 l0 wide along a slanted
 /// edge; l0 along an axis-aligned one, where at most the last row of sites is left over
@@ -94,7 +95,14 @@ pub fn estimated_particles(case: &Case) -> Option<f64> {
         .iter()
         .map(|b| {
             let poly = points(&b.polygon);
-            let area = signed_area(&poly).abs();
+            // rows pressed to fit the block's height hold up to one row more
+            let (lo, hi) = poly
+                .iter()
+                .fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), p| {
+                    (lo.min(p.y), hi.max(p.y))
+                });
+            let (_, pitch) = super::layout::block_rows(hi - lo, l0);
+            let area = signed_area(&poly).abs() * (l0 / pitch);
             let inside = |boxes: &[FineBox], band: f64| -> f64 {
                 let a: f64 = boxes
                     .iter()
