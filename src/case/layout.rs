@@ -29,11 +29,10 @@ pub const FAR_MARGIN: Real = 0.5;
 /// The rows of a fluid block of height `height` at spacing `l0`: how many, and their
 /// pitch. A height that is a whole number of spacings keeps l0; any other is filled
 /// with one row more, pressed together to fit, so that the block's top and bottom are
-/// where the case draws them (a free surface half a pitch above the top row). Filled at
-/// l0 from the bottom, a 1.1 m tank at 12 mm left its surface 8 mm low, and the 25° drop
-/// test touched the water 1.6 ms late: its velocity read 10.3 % from the experiment's
-/// against 7.5 % with the surface in place. The pitch is at least (1 − 1/rows) l0 (0.36 %
-/// less there): pressed, not stretched, so that no interior row reads as free surface.
+/// where the case draws them (a free surface half a pitch above the top row): rows l0
+/// apart from the bottom would leave the surface of the 25° drop test's 1.1 m tank at
+/// 12 mm 8 mm low. The pitch is at least (1 − 1/rows) l0 (0.36 % less there): pressed,
+/// not stretched, so that no interior row reads as free surface (n* < 0.97 n0).
 pub fn block_rows(height: Real, l0: Real) -> (i64, Real) {
     let spacings = height / l0;
     let whole = (spacings + 1e-9).floor();

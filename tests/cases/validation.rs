@@ -497,7 +497,14 @@ fn the_far_clearance_does_not_depend_on_round_off_of_the_spacing() {
             .len() as f64;
         (n, mpsfsi::case::estimated_particles(&case).unwrap())
     };
-    assert!(2.5 * 0.0037 / 0.0037 > 2.5, "the spacing must round up");
+    let radius = mpsfsi::case::load_case_file(&path, &[])
+        .unwrap()
+        .scheme
+        .neighbour_radius();
+    assert!(
+        radius * 0.0037 / 0.0037 > radius,
+        "the spacing must round up"
+    );
     let (odd, odd_estimate) = built(0.0037);
     let (exact, _) = built(0.003_700_000_01);
     assert!(
