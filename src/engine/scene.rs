@@ -231,8 +231,8 @@ pub fn build_scene_placed(case: &Case, params: &MpsParameters, phase: Option<Rea
             let far = far_boxes.as_deref().map(|boxes| FarLevel {
                 boxes,
                 // in spacings as the scheme states it, as the particle estimate takes
-                // it: (r_e l0) / l0 lands one ulp above 2.5 for about 0.8 % of spacings
-                // (l0 = 1.99997 m), which would widen the clearance by a cell
+                // it: (r_e l0) / l0 lands one ulp above 2.5 at some spacings (3.7 mm
+                // among them), which widened the clearance by a cell
                 radius: case.scheme.neighbour_radius(),
             });
             let sites = pos.into_iter().zip(vel).collect();
