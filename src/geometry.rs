@@ -83,6 +83,17 @@ impl WallShape {
 }
 
 /// Twice-signed area / 2 (positive when counter-clockwise).
+/// The axis-aligned bounds (lower-left, upper-right) of `points`.
+pub fn bounds(points: &[Vec2]) -> (Vec2, Vec2) {
+    let mut lo = Vec2::repeat(Real::INFINITY);
+    let mut hi = Vec2::repeat(Real::NEG_INFINITY);
+    for p in points {
+        lo = lo.inf(p);
+        hi = hi.sup(p);
+    }
+    (lo, hi)
+}
+
 pub fn signed_area(points: &[Vec2]) -> Real {
     let n = points.len();
     (0..n)

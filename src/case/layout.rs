@@ -8,7 +8,7 @@
 
 use super::prescribed::PrescribedVelocity;
 use super::{Body, Case, Motion, Projection, Refinement, Scheme};
-use crate::geometry::centroid;
+use crate::geometry::{bounds, centroid};
 use crate::math::{rotate, vec2, Real, Vec2};
 
 /// Margin of an automatic fine box around a body's swept path, in body sizes (the
@@ -143,14 +143,7 @@ fn swept_box(body: &Body, case: &Case, margin: Real) -> Option<FineBox> {
     let poly: Vec<Vec2> = body.polygon.iter().map(|p| vec2(*p)).collect();
     let c = centroid(&poly);
     let radius = poly.iter().map(|p| (p - c).norm()).fold(0.0, Real::max);
-    let (mut lo, mut hi) = (
-        Vec2::repeat(Real::INFINITY),
-        Vec2::repeat(Real::NEG_INFINITY),
-    );
-    for p in &poly {
-        lo = lo.inf(p);
-        hi = hi.sup(p);
-    }
+    let (lo, hi) = bounds(&poly);
     let size = (hi.x - lo.x).max(hi.y - lo.y);
     let end = case.time.end;
     let g = vec2(case.fluid.gravity);

@@ -55,12 +55,7 @@ pub struct Scene {
 pub fn fill_polygon(polygon: &[Vec2], l0: Real) -> (Vec<Vec2>, Real) {
     let n = polygon.len();
     let edges: Vec<[Vec2; 2]> = (0..n).map(|k| [polygon[k], polygon[(k + 1) % n]]).collect();
-    let mut lo = Vec2::repeat(Real::INFINITY);
-    let mut hi = Vec2::repeat(Real::NEG_INFINITY);
-    for p in polygon {
-        lo = lo.inf(p);
-        hi = hi.sup(p);
-    }
+    let (lo, hi) = crate::geometry::bounds(polygon);
     let nx = ((hi.x - lo.x) / l0 + 1e-9).floor() as i64;
     let (ny, dy) = crate::case::layout::block_rows(hi.y - lo.y, l0);
     let mut pts = Vec::new();

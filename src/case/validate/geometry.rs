@@ -4,7 +4,7 @@
 use super::scalars::positive;
 use super::{points, reject, Check, MAX_VERTICES};
 use crate::case::{Body, Case, CaseError, Motion, Point};
-use crate::geometry::{inside, segments_intersect, signed_area};
+use crate::geometry::{bounds, inside, segments_intersect, signed_area};
 use crate::math::{vec2, Real, Vec2};
 
 /// A closed polygon: >= 3 vertices, no repeated consecutive vertex, non-zero area,
@@ -74,16 +74,6 @@ fn check_polygon(path: &str, polygon: &[Point]) -> Result<f64, CaseError> {
         );
     }
     Ok(area)
-}
-
-fn bounds(pts: &[Vec2]) -> (Vec2, Vec2) {
-    let mut lo = Vec2::repeat(Real::INFINITY);
-    let mut hi = Vec2::repeat(Real::NEG_INFINITY);
-    for p in pts {
-        lo = lo.inf(p);
-        hi = hi.sup(p);
-    }
-    (lo, hi)
 }
 
 fn in_domain(case: &Case, p: Point) -> bool {

@@ -28,7 +28,7 @@ mod scalars;
 
 use super::layout::{far_clearance, FineBox};
 use super::{Case, CaseError, Point};
-use crate::geometry::signed_area;
+use crate::geometry::{bounds, signed_area};
 use crate::math::{vec2, Vec2};
 
 /// Limits configured by the operator of the tool (CLI flags, service config).
@@ -96,12 +96,8 @@ pub fn estimated_particles(case: &Case) -> Option<f64> {
         .map(|b| {
             let poly = points(&b.polygon);
             // rows pressed to fit the block's height hold up to one row more
-            let (lo, hi) = poly
-                .iter()
-                .fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), p| {
-                    (lo.min(p.y), hi.max(p.y))
-                });
-            let (_, pitch) = super::layout::block_rows(hi - lo, l0);
+            let (lo, hi) = bounds(&poly);
+            let (_, pitch) = super::layout::block_rows(hi.y - lo.y, l0);
             let area = signed_area(&poly).abs() * (l0 / pitch);
             let inside = |boxes: &[FineBox], band: f64| -> f64 {
                 let a: f64 = boxes
