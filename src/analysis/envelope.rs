@@ -23,11 +23,11 @@ const FLAT_DEG: Real = 5.0;
 
 /// A free body whose mass per metre is at most this multiple of the added mass of a
 /// plate of its breadth, ρπB²/8 (the water it sets moving once the breadth is wet), is
-/// light. The bodies measured at or below 1.0 slow too little: the 25° wedge of 94
-/// kg/m (0.17) loses 11 % too little speed at 100 spacings across, the half-buoyant
-/// cylinder (1.0) sinks 9 % too deep, the 30° free fall at a quarter of its mass (0.61)
-/// loses 4 % too little; the shipped 241 kg/m free fall (2.45) 3 % too little, inside
-/// its test's 5 %.
+/// light: its motion is set by its added mass, and the measured light bodies slow less
+/// than their experiments did. The 25° wedge of 94 kg/m (0.17) follows quasi-steady
+/// potential flow within 1.3 % and, like that theory, loses 10 % too little speed against
+/// its drop test; the half-buoyant cylinder (1.0) sinks 9 % too deep. The shipped 241
+/// kg/m free fall (2.45) is within 1.5 % of potential flow.
 const LIGHT_BODY_SHARE: Real = 2.0;
 
 /// Advice for every body that enters the water outside the validated envelope: a body
@@ -76,7 +76,7 @@ fn light_body_advice(case: &Case, body: &Body, breadth: Real) -> Option<String> 
     let plate = case.fluid.density * std::f64::consts::PI * breadth * breadth / 8.0;
     (*mass <= LIGHT_BODY_SHARE * plate).then(|| {
         format!(
-            "body {}: light ({mass} kg/m against an added mass of about {} kg/m once its {breadth:.3} m breadth is wet): with the default scheme a light body slows too little; a 25° wedge of 94 kg/m loses 11 % too little speed at 100 spacings across, 10 % at 200 (docs/validation.md, light drop tests)",
+            "body {}: light ({mass} kg/m against an added mass of about {} kg/m once its {breadth:.3} m breadth is wet): its speed is set by its added mass; a 25° wedge of 94 kg/m follows potential flow within 1.3 % but, like that theory, loses 10 % less speed than its drop test did (docs/validation.md, light drop tests)",
             body.name,
             three_digits(plate)
         )

@@ -297,3 +297,58 @@ impl FreeFall for LogvinovichFreeFall {
             .collect()
     }
 }
+
+/// The quasi-steady potential-flow model of a wedge falling freely into calm water: at
+/// each instant the similarity solution's force at the body's depth and speed,
+/// C_F rho V² h, plus its acceleration reaction, `acceleration_added_mass` rho h² dV/dt
+/// (the potential-flow added mass of the similarity solution's wetted geometry,
+/// `analysis::similarity::SimilaritySolution::acceleration_added_mass`), closed with M dV/dt = M g - F (downward
+/// positive): dV/dt = (M g - C_F rho V² h) / (M + k rho h²), from contact at t = 0.
+/// The momentum model ([`FreeFallModel`]) is the same with k = C_F/2; potential flow
+/// gives 1.19 C_F/2 at 30° (8.31 rho h²), so a light body loses less speed than that
+/// model says.
+#[derive(Debug, Clone, Copy)]
+pub struct PotentialFlowFreeFall {
+    /// Downward speed at contact (m/s).
+    pub v0: Real,
+    /// Downward gravity (m/s²).
+    pub g: Real,
+    /// Body mass per metre (kg/m).
+    pub mass: Real,
+    pub density: Real,
+    /// C_F = F / (rho V³ t) at constant speed.
+    pub force_coefficient: Real,
+    /// The added mass of the acceleration, in rho h².
+    pub acceleration_added_mass: Real,
+}
+
+impl FreeFall for PotentialFlowFreeFall {
+    fn initial_speed(&self) -> Real {
+        self.v0
+    }
+    /// Integrated with a step of 0.1 µs (midpoint rule), far below a run's.
+    fn speeds(&self, times: &[Real]) -> Vec<Real> {
+        let Self {
+            v0,
+            g,
+            mass,
+            density: rho,
+            force_coefficient: c_f,
+            acceleration_added_mass: k,
+        } = *self;
+        let rate = |h: Real, v: Real| (mass * g - c_f * rho * v * v * h) / (mass + k * rho * h * h);
+        let (dt, mut t, mut h, mut v) = (1e-7, 0.0, 0.0, v0);
+        times
+            .iter()
+            .map(|&at| {
+                while t < at {
+                    let (hm, vm) = (h + 0.5 * dt * v, v + 0.5 * dt * rate(h, v));
+                    h += dt * vm;
+                    v += dt * rate(hm, vm);
+                    t += dt;
+                }
+                v
+            })
+            .collect()
+    }
+}

@@ -7,10 +7,11 @@
 //! multiplies the acceleration, in units of rho h². The theories (docs/references.md,
 //! Wedge entry) differ in it: the momentum model's C_F/2 = 7.02, the modified
 //! Logvinovich model's pi k²/2 + k² tan β - 2k = 10.46 (k = pi / (2 tan β)), Wagner's
-//! flat-plate rho pi c²/2 at Wagner's c, pi³ / (8 tan² β) = 11.63. Over the four axis
-//! offsets of the impact ensembles the engine reads k = 8.32 ± 0.62 (docs/validation.md):
-//! between the momentum model and the Logvinovich split, which the test asserts. It does not yet say which model a light drop should follow (see
-//! docs/validation.md).
+//! flat-plate rho pi c²/2 at Wagner's c, pi³ / (8 tan² β) = 11.63. Potential flow on the
+//! similarity solution's wetted geometry gives 8.31
+//! (`analysis::similarity`, its `acceleration_added_mass`): the reference the test
+//! asserts. Over the four axis offsets of the impact ensembles the engine reads k = 8.84
+//! (8.46 / 10.09 / 7.95 / 8.85, standard error 0.46; docs/validation.md).
 
 use super::common::{run_case_rows, shipped};
 use mpsfsi::run::RunStatus;
@@ -127,22 +128,26 @@ fn reaction_coefficient(offset: f64) -> f64 {
 }
 
 #[test]
-#[ignore = "4 minutes on two cores; passes: k = 8.32 over four offsets"]
-fn a_wedge_entry_s_acceleration_reaction_lies_between_the_momentum_and_logvinovich_models() {
+#[ignore = "7 minutes on two cores; passes: k = 8.84 over four offsets, +6.4 % against 8.31"]
+fn a_wedge_entry_s_acceleration_reaction_is_the_potential_flow_added_mass() {
     let beta = 30f64.to_radians();
     let kw = std::f64::consts::PI / (2.0 * beta.tan());
     let logvinovich = std::f64::consts::PI * kw * kw / 2.0 + kw * kw * beta.tan() - 2.0 * kw;
     let momentum = mpsfsi::analysis::reference::WEDGE_30_FORCE_COEFFICIENT / 2.0;
+    let potential = crate::common::wedge_30_acceleration_added_mass();
     let ks: Vec<f64> = super::impact::AXIS_OFFSETS
         .iter()
         .map(|&d| reaction_coefficient(d))
         .collect();
     let mean = ks.iter().sum::<f64>() / ks.len() as f64;
     println!(
-        "k = {mean:.2} over {ks:?}; momentum model {momentum:.2}, Logvinovich {logvinovich:.2}"
+        "k = {mean:.2} over {ks:?}; potential flow {potential:.2}, momentum model {momentum:.2}, Logvinovich {logvinovich:.2}"
     );
+    // the four offsets scatter by 0.91 about their mean: 10 % is about two standard
+    // errors of it (0.46), and excludes the momentum model (-16 %) and Logvinovich's
+    // (+26 %)
     assert!(
-        momentum < mean && mean < logvinovich,
-        "the acceleration reaction {mean:.2} rho h² is outside [{momentum:.2}, {logvinovich:.2}]"
+        (mean / potential - 1.0).abs() <= 0.10,
+        "the acceleration reaction {mean:.2} rho h² is more than 10 % from potential flow's {potential:.2}"
     );
 }

@@ -2,7 +2,7 @@
 //! keep the per-step loads and body samples.
 
 use mpsfsi::analysis::reference::{
-    FreeFall, FreeFallModel, LogvinovichFreeFall, WEDGE_30_FORCE_COEFFICIENT,
+    FreeFall, FreeFallModel, LogvinovichFreeFall, PotentialFlowFreeFall, WEDGE_30_FORCE_COEFFICIENT,
 };
 use mpsfsi::case::{load_case_file, Case, Limits, ValidCase};
 use mpsfsi::coupling::{BodySample, Coupling, CouplingOptions};
@@ -167,6 +167,31 @@ pub fn csv_rows(path: &std::path::Path, name: &str) -> Vec<Vec<f64>> {
 /// run's.
 pub fn momentum_model_errors(case: &Case, mass: Real, bodies: &[Vec<f64>]) -> Vec<(Real, Real)> {
     velocity_loss_against(&momentum_model(case, mass), bodies)
+}
+
+/// The potential-flow added mass of the 30° wedge's acceleration, in rho h²
+/// (`analysis::similarity`).
+pub fn wedge_30_acceleration_added_mass() -> Real {
+    mpsfsi::analysis::similarity::solution(30.0)
+        .and_then(|s| s.acceleration_added_mass)
+        .expect("the 30° similarity solution carries its added mass")
+}
+
+/// The same against the quasi-steady potential-flow model (`PotentialFlowFreeFall`): the
+/// similarity solution's force at the body's depth and speed plus its acceleration
+/// reaction, the potential-flow added mass of its wetted geometry (8.31 rho h² at 30°,
+/// 1.19 times the momentum model's C_F/2), which the engine's own acceleration reaction
+/// matches (tests/bodies/acceleration_reaction.rs). The free-fall tests hold to it.
+pub fn potential_flow_errors(case: &Case, mass: Real, bodies: &[Vec<f64>]) -> Vec<(Real, Real)> {
+    let model = PotentialFlowFreeFall {
+        v0: -case.bodies[0].motion_velocity_y(),
+        g: -case.fluid.gravity[1],
+        mass,
+        density: RHO,
+        force_coefficient: WEDGE_30_FORCE_COEFFICIENT,
+        acceleration_added_mass: wedge_30_acceleration_added_mass(),
+    };
+    velocity_loss_against(&model, bodies)
 }
 
 /// The same against the modified Logvinovich model (the closure of a free fall in

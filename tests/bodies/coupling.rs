@@ -183,22 +183,22 @@ fn free_fall_wedge_velocity_matches_its_own_loads() {
     );
 }
 
-/// The free-fall wedge at 1 cm loses speed as the momentum balance of the similarity
-/// solution says (`momentum_model_errors`): over 0.6-0.9 t_chine the mean within 5 %,
-/// each sample within 10 % (reads -0.9 % and -4.2 %; the force comes in bursts as the
-/// wedge meets each lattice row, B/l0 = 50). The model takes the acceleration part of the force (m_a dV/dt, about
-/// 12 % of it at 0.8 t_chine) from the same added mass, which is Wagner's assumption,
-/// not the similarity solution's. The free-fall tests hold to this split because the
-/// published potential-flow solution of a light drop is closest to it among the
-/// theories' (+3.3 % mean against it, Logvinovich's +8.9 %: docs/validation.md, "The
-/// free fall's reference for a light body"). At B/l0 = 100 with 5 % on the mean:
-/// tests/bodies/impact.rs.
+/// The free-fall wedge at 1 cm loses speed as quasi-steady potential flow says
+/// (`potential_flow_errors`: the similarity solution's force at the body's depth and
+/// speed plus the potential-flow added mass of its acceleration, 8.31 rho h²): over
+/// 0.6-0.9 t_chine the mean within 5 %, each sample within 10 % (the force comes in
+/// bursts as the wedge meets each lattice row, B/l0 = 50). The free-fall tests hold to
+/// this split because it is potential flow's on the similarity solution's geometry and
+/// the engine's own acceleration reaction reads it within 6.4 %
+/// (tests/bodies/acceleration_reaction.rs); the momentum model (C_F/2 = 7.02) is printed
+/// beside it. At B/l0 = 100: tests/bodies/impact.rs.
 #[test]
-fn free_fall_wedge_slows_like_the_momentum_model() {
+fn free_fall_wedge_slows_as_potential_flow_says() {
     let FreeFallRun {
         case, mass, bodies, ..
     } = free_fall_run();
-    let errors = momentum_model_errors(case, *mass, bodies);
+    let errors = potential_flow_errors(case, *mass, bodies);
+    let momentum = momentum_model_errors(case, *mass, bodies);
     let mean = mpsfsi::analysis::measure::mean_error(&errors);
     let (t_worst, worst) = errors
         .iter()
@@ -206,11 +206,12 @@ fn free_fall_wedge_slows_like_the_momentum_model() {
         .max_by(|a, b| a.1.abs().total_cmp(&b.1.abs()))
         .unwrap();
     println!(
-        "free fall: velocity loss against the momentum model over 0.6-0.9 t_chine ({} samples): mean {:+.2} %, worst {:+.2} % at {:.2} ms",
+        "free fall: velocity loss against potential flow over 0.6-0.9 t_chine ({} samples): mean {:+.2} %, worst {:+.2} % at {:.2} ms; against the momentum model mean {:+.2} %",
         errors.len(),
         100.0 * mean,
         100.0 * worst,
-        1e3 * t_worst
+        1e3 * t_worst,
+        100.0 * mpsfsi::analysis::measure::mean_error(&momentum)
     );
     assert!(errors.len() >= 30, "too few samples: {}", errors.len());
     assert!(mean.abs() < 0.05, "mean error {mean:+.3}");

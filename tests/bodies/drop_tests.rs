@@ -6,11 +6,16 @@
 //! The criteria are the drop-test work's: the velocity (the cylinder's record is its
 //! penetration) within a mean 5 % and every point within 10 %, and the velocity lost
 //! since entry within a mean 10 %. Neither model meets them yet: the engine's bodies
-//! slow too little, against the experiment and against potential flow alike (numbers in
-//! docs/validation.md). The tests are ignored until the default does.
+//! slow too little, against the experiment and against the published potential-flow
+//! curve alike (numbers in docs/validation.md), and those tests are ignored. The wedge
+//! follows quasi-steady potential flow (the similarity solution's force at its depth and
+//! speed plus the potential-flow added mass of its acceleration) within a mean 1.3 %, and that
+//! model itself reads 7.1 % (worst +14.7 %) from the experiment: what is left is between
+//! the theory and the experiment, which a time-stepping potential-flow solution of the
+//! decelerating drop would arbitrate.
 
 use super::common::run_case_rows;
-use mpsfsi::analysis::reference::{FreeFall, FreeFallModel};
+use mpsfsi::analysis::reference::{FreeFall, FreeFallModel, PotentialFlowFreeFall};
 use mpsfsi::case::load_case_file;
 use mpsfsi::run::RunStatus;
 use std::f64::consts::PI;
@@ -107,6 +112,45 @@ fn a_light_wedge_slows_as_the_experiment_s_did() {
         "speed lost mean error {:.1} %",
         100.0 * lost_mean
     );
+}
+
+/// The 25° wedge drop against quasi-steady potential flow (`PotentialFlowFreeFall` with
+/// the 25° similarity solution's C_F = 23.55 and its added mass of the acceleration,
+/// 13.45 rho h², 1.14 C_F/2), at the experiment's 40 times: the velocity within a mean
+/// 3 % and every point within 5 %. Reads 1.3 % (worst -3.1 % at 11 ms), 0.6 % at 6 mm.
+/// With the momentum model's added mass (C_F/2) instead, the same run reads 2.3 % (worst
+/// +5.1 %), 1.7 % at 6 mm.
+#[test]
+fn a_light_wedge_drop_follows_quasi_steady_potential_flow() {
+    let similarity = mpsfsi::analysis::similarity::solution(25.0).unwrap();
+    let model = PotentialFlowFreeFall {
+        v0: WEDGE_ENTRY_SPEED,
+        g: GRAVITY,
+        mass: 94.0,
+        density: 1000.0,
+        force_coefficient: similarity.force_coefficient,
+        acceleration_added_mass: similarity.acceleration_added_mass.unwrap(),
+    };
+    let run = run_drop("wedge_25deg_94kg.json", "wedge");
+    let times: Vec<f64> = curve("wedge_25deg_94kg_velocity_experiment.csv")
+        .iter()
+        .map(|p| p.0 * 1e-3)
+        .collect();
+    let pairs: Vec<(f64, f64)> = times
+        .iter()
+        .zip(model.speeds(&times))
+        .filter_map(|(&t, v)| at(&run, t, |r| r.2).map(|c| (c, v)))
+        .collect();
+    let (mean, worst) = errors(&pairs);
+    println!(
+        "against quasi-steady potential flow: {} points, velocity mean {:.1} %, worst {:.1} %",
+        pairs.len(),
+        100.0 * mean,
+        100.0 * worst
+    );
+    assert!(pairs.len() >= 35, "{} points inside the run", pairs.len());
+    assert!(mean <= 0.03, "velocity mean error {:.1} %", 100.0 * mean);
+    assert!(worst <= 0.05, "velocity worst error {:.1} %", 100.0 * worst);
 }
 
 const CYLINDER_DIAMETER: f64 = 0.11;

@@ -764,6 +764,47 @@ fn a_very_heavy_body_falls_freely_in_the_logvinovich_model() {
     }
 }
 
+/// The potential-flow free fall with the momentum model's added mass of the
+/// acceleration, k = C_F/2, is the momentum model: F = C_F rho V² h + (C_F/2) rho h² dV/dt
+/// is d/dt(m_a V) with m_a = C_F rho h²/2, whose closed form (M + m_a) V = M (V0 + g t)
+/// `FreeFallModel` integrates. With potential flow's k = 8.31 (1.19 C_F/2) the light
+/// body loses less speed.
+#[test]
+fn the_potential_flow_free_fall_with_the_momentum_split_is_the_momentum_model() {
+    use mpsfsi::analysis::reference::{
+        FreeFall, FreeFallModel, PotentialFlowFreeFall, WEDGE_30_FORCE_COEFFICIENT,
+    };
+    let k = mpsfsi::analysis::similarity::solution(30.0)
+        .and_then(|s| s.acceleration_added_mass)
+        .unwrap();
+    let momentum = FreeFallModel {
+        v0: 6.15,
+        g: 9.81,
+        mass: 60.25,
+        force_coefficient: WEDGE_30_FORCE_COEFFICIENT,
+        density: 1000.0,
+    };
+    let split = |k: f64| PotentialFlowFreeFall {
+        v0: 6.15,
+        g: 9.81,
+        mass: 60.25,
+        density: 1000.0,
+        force_coefficient: WEDGE_30_FORCE_COEFFICIENT,
+        acceleration_added_mass: k,
+    };
+    let times = [0.005, 0.01, 0.0134];
+    let closed = momentum.speeds(&times);
+    let same = split(WEDGE_30_FORCE_COEFFICIENT / 2.0).speeds(&times);
+    let potential = split(k).speeds(&times);
+    for k in 0..times.len() {
+        assert!(
+            (same[k] / closed[k] - 1.0).abs() < 1e-5,
+            "{same:?} against {closed:?}"
+        );
+        assert!(potential[k] > closed[k], "{potential:?} against {closed:?}");
+    }
+}
+
 /// `bench --uncertainty` on the still tank: the study's error (the wall's load against
 /// the water's weight, exact in the limit) lies within the band of the ladder, and the
 /// band is tight (under 1 % of the load: still water has no discretisation trend).
