@@ -178,19 +178,29 @@ impl FreeFall for FreeFallModel {
             force_coefficient: c_f,
             density: rho,
         } = *self;
-        let (dt, mut t, mut h, mut v) = (1e-7, 0.0, 0.0, v0);
-        times
-            .iter()
-            .map(|&at| {
-                while t < at {
-                    h += v * dt;
-                    t += dt;
-                    v = mass * (v0 + g * t) / (mass + 0.5 * c_f * rho * h * h);
-                }
-                v
-            })
-            .collect()
+        let (dt, mut h, mut v) = (1e-7, 0.0, v0);
+        march(times, dt, v0, |t| {
+            h += v * dt;
+            v = mass * (v0 + g * t) / (mass + 0.5 * c_f * rho * h * h);
+            v
+        })
     }
+}
+
+/// The speed at each of `times` (ascending) of a march from speed `v0` at t = 0 in steps
+/// of `dt`: `step(t)` takes one step to time t and returns the speed there.
+fn march(times: &[Real], dt: Real, v0: Real, mut step: impl FnMut(Real) -> Real) -> Vec<Real> {
+    let (mut t, mut v) = (0.0, v0);
+    times
+        .iter()
+        .map(|&at| {
+            while t < at {
+                t += dt;
+                v = step(t);
+            }
+            v
+        })
+        .collect()
 }
 
 /// The modified Logvinovich model of a wedge of deadrise `beta` (radians) falling freely
@@ -337,18 +347,12 @@ impl FreeFall for PotentialFlowFreeFall {
             acceleration_added_mass: k,
         } = *self;
         let rate = |h: Real, v: Real| (mass * g - c_f * rho * v * v * h) / (mass + k * rho * h * h);
-        let (dt, mut t, mut h, mut v) = (1e-7, 0.0, 0.0, v0);
-        times
-            .iter()
-            .map(|&at| {
-                while t < at {
-                    let (hm, vm) = (h + 0.5 * dt * v, v + 0.5 * dt * rate(h, v));
-                    h += dt * vm;
-                    v += dt * rate(hm, vm);
-                    t += dt;
-                }
-                v
-            })
-            .collect()
+        let (dt, mut h, mut v) = (1e-7, 0.0, v0);
+        march(times, dt, v0, |_| {
+            let (hm, vm) = (h + 0.5 * dt * v, v + 0.5 * dt * rate(h, v));
+            h += dt * vm;
+            v += dt * rate(hm, vm);
+            v
+        })
     }
 }
