@@ -312,8 +312,9 @@ impl FreeFall for LogvinovichFreeFall {
 /// each instant the similarity solution's force at the body's depth and speed,
 /// C_F rho V² h, plus its acceleration reaction, `acceleration_added_mass` rho h² dV/dt
 /// (the potential-flow added mass of the similarity solution's wetted geometry,
-/// `analysis::similarity::SimilaritySolution::acceleration_added_mass`), closed with M dV/dt = M g - F (downward
-/// positive): dV/dt = (M g - C_F rho V² h) / (M + k rho h²), from contact at t = 0.
+/// `analysis::similarity::SimilaritySolution::acceleration_added_mass`), closed with
+/// M dV/dt = M g - F (downward positive): dV/dt = (M g - C_F rho V² h) / (M + k rho h²),
+/// from contact at t = 0.
 /// The momentum model ([`FreeFallModel`]) is the same with k = C_F/2; potential flow
 /// gives 1.19 C_F/2 at 30° (8.31 rho h²), so a light body loses less speed than that
 /// model says.

@@ -45,10 +45,9 @@ pub struct SimilaritySolution {
     /// The added mass of the body's acceleration in ρ (Vt)²: the pressure's share
     /// proportional to dV/dt solves Laplace's equation with p = 0 on this solution's free
     /// surface and the body's normal acceleration on the face, so the force a change of
-    /// speed adds at a given depth and speed is this times ρ h² dV/dt. 1.10–1.28 times
-    /// C_F/2, the momentum model's (the spray carries off force that is not added mass).
-    /// None where it was not computed (15°: the example's march does not start there
-    /// with today's grading).
+    /// speed adds at a given depth and speed is this times ρ h² dV/dt: 1.10–1.28 times
+    /// the momentum model's C_F/2. None at 15°, where the example's march now stops in
+    /// its regrid (`graded`); the 15° table was computed before.
     pub acceleration_added_mass: Option<Real>,
     /// (z/(Vt), Cp) along the face, z increasing
     pub profile: &'static [(Real, Real)],
