@@ -109,6 +109,12 @@ pub fn cp_profile(deadrise_deg: Real) -> Option<&'static [(Real, Real)]> {
     solution(deadrise_deg).map(|s| s.profile)
 }
 
+/// The added mass of the acceleration (ρ (Vt)²) at a tabulated deadrise where it was
+/// computed, None otherwise.
+pub fn acceleration_added_mass(deadrise_deg: Real) -> Option<Real> {
+    solution(deadrise_deg).and_then(|s| s.acceleration_added_mass)
+}
+
 /// Cp at height z/(Vt) on the face: linear between the table's points, the keel's value
 /// below the keel, 0 above the last point (the dry spray); None for a deadrise not
 /// tabulated.

@@ -134,7 +134,7 @@ fn a_wedge_entry_s_acceleration_reaction_is_the_potential_flow_added_mass() {
     let kw = std::f64::consts::PI / (2.0 * beta.tan());
     let logvinovich = std::f64::consts::PI * kw * kw / 2.0 + kw * kw * beta.tan() - 2.0 * kw;
     let momentum = mpsfsi::analysis::reference::WEDGE_30_FORCE_COEFFICIENT / 2.0;
-    let potential = crate::common::wedge_30_acceleration_added_mass();
+    let potential = mpsfsi::analysis::similarity::acceleration_added_mass(30.0).unwrap();
     let ks: Vec<f64> = super::impact::AXIS_OFFSETS
         .iter()
         .map(|&d| reaction_coefficient(d))

@@ -4,6 +4,7 @@
 use mpsfsi::analysis::reference::{
     FreeFall, FreeFallModel, LogvinovichFreeFall, PotentialFlowFreeFall, WEDGE_30_FORCE_COEFFICIENT,
 };
+use mpsfsi::analysis::similarity;
 use mpsfsi::case::{load_case_file, Case, Limits, ValidCase};
 use mpsfsi::coupling::{BodySample, Coupling, CouplingOptions};
 use mpsfsi::engine::{SimError, Simulation};
@@ -169,14 +170,6 @@ pub fn momentum_model_errors(case: &Case, mass: Real, bodies: &[Vec<f64>]) -> Ve
     velocity_loss_against(&momentum_model(case, mass), bodies)
 }
 
-/// The potential-flow added mass of the 30° wedge's acceleration, in rho h²
-/// (`analysis::similarity`).
-pub fn wedge_30_acceleration_added_mass() -> Real {
-    mpsfsi::analysis::similarity::solution(30.0)
-        .and_then(|s| s.acceleration_added_mass)
-        .expect("the 30° similarity solution carries its added mass")
-}
-
 /// The same against the quasi-steady potential-flow model (`PotentialFlowFreeFall`): the
 /// similarity solution's force at the body's depth and speed plus its acceleration
 /// reaction, the potential-flow added mass of its wetted geometry (8.31 rho h² at 30°,
@@ -189,7 +182,7 @@ pub fn potential_flow_errors(case: &Case, mass: Real, bodies: &[Vec<f64>]) -> Ve
         mass,
         density: RHO,
         force_coefficient: WEDGE_30_FORCE_COEFFICIENT,
-        acceleration_added_mass: wedge_30_acceleration_added_mass(),
+        acceleration_added_mass: similarity::acceleration_added_mass(30.0).unwrap(),
     };
     velocity_loss_against(&model, bodies)
 }

@@ -774,9 +774,7 @@ fn the_potential_flow_free_fall_with_the_momentum_split_is_the_momentum_model() 
     use mpsfsi::analysis::reference::{
         FreeFall, FreeFallModel, PotentialFlowFreeFall, WEDGE_30_FORCE_COEFFICIENT,
     };
-    let k = mpsfsi::analysis::similarity::solution(30.0)
-        .and_then(|s| s.acceleration_added_mass)
-        .unwrap();
+    let k = mpsfsi::analysis::similarity::acceleration_added_mass(30.0).unwrap();
     let momentum = FreeFallModel {
         v0: 6.15,
         g: 9.81,
@@ -796,12 +794,12 @@ fn the_potential_flow_free_fall_with_the_momentum_split_is_the_momentum_model() 
     let closed = momentum.speeds(&times);
     let same = split(WEDGE_30_FORCE_COEFFICIENT / 2.0).speeds(&times);
     let potential = split(k).speeds(&times);
-    for k in 0..times.len() {
+    for i in 0..times.len() {
         assert!(
-            (same[k] / closed[k] - 1.0).abs() < 1e-5,
+            (same[i] / closed[i] - 1.0).abs() < 1e-5,
             "{same:?} against {closed:?}"
         );
-        assert!(potential[k] > closed[k], "{potential:?} against {closed:?}");
+        assert!(potential[i] > closed[i], "{potential:?} against {closed:?}");
     }
 }
 
